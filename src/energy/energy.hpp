@@ -1,0 +1,134 @@
+#pragma once
+// One Energy interface for every term of the incremental potential.
+//
+// An energy is a sum over elements, each touching a fixed number K of vertices:
+//   E(x) = Σ_e E_e(x_e),   x_e ∈ R^{3K} gathered from x (3N, xyz interleaved).
+// Concrete energies implement only the three element-level functions (value,
+// gradient, Hessian with fixed-size Eigen types) by deriving from
+// ElementEnergy<K>; summation, gradient scatter and PSD projection live here,
+// and sparse assembly lives in energy/hessian_assembler.hpp, written once.
+//
+// Thread safety: all const member functions may be called concurrently.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/psd_projection.hpp"
+#include "core/types.hpp"
+
+namespace lb {
+
+class Energy {
+public:
+    virtual ~Energy() = default;
+
+    virtual std::string name() const = 0;
+    virtual Index num_elements() const = 0;
+    /// Number of vertices K per element.
+    virtual int nodes_per_element() const = 0;
+    /// Pointer to the K vertex indices of element e.
+    virtual const int* element_nodes(Index e) const = 0;
+
+    /// Element energy E_e at the global state x (3N).
+    virtual double element_value(Index e, const VectorXd& x) const = 0;
+    /// Writes ∂E_e/∂x_e (3K values) to g.
+    virtual void element_gradient(Index e, const VectorXd& x, double* g) const = 0;
+    /// Writes ∂²E_e/∂x_e² (3K×3K, column-major) to H, PSD-projected if asked.
+    virtual void element_hessian(Index e, const VectorXd& x, bool project_psd, double* H) const = 0;
+    /// True if the Hessian is identically zero (e.g. gravity): assembly skips it.
+    virtual bool has_zero_hessian() const { return false; }
+
+    /// E(x) = Σ_e E_e (OpenMP-parallel reduction).
+    double value(const VectorXd& x) const;
+    /// g += weight · ∇E(x).
+    void add_gradient(const VectorXd& x, double weight, VectorXd& g) const;
+    /// ∇E(x) (3N).
+    VectorXd gradient(const VectorXd& x) const;
+    /// Dense-free sparse Hessian over all 3N DOFs (full, both triangles); for
+    /// tests and small problems. Newton uses HessianAssembler instead.
+    SparseMatrixd hessian(const VectorXd& x, bool project_psd) const;
+};
+
+/// Base for energies whose elements have K vertices. Derived classes implement
+/// local_value/local_gradient/local_hessian on the gathered element vector.
+template <int K>
+class ElementEnergy : public Energy {
+public:
+    static constexpr int kNodes = K;
+    static constexpr int kDofs = 3 * K;
+    using ElementVector = Eigen::Matrix<double, kDofs, 1>;
+    using ElementMatrix = Eigen::Matrix<double, kDofs, kDofs>;
+    using Elements = Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>;
+
+    explicit ElementEnergy(Elements elements) : m_elements(std::move(elements)) { }
+
+    Index num_elements() const final { return m_elements.rows(); }
+    int nodes_per_element() const final { return K; }
+    const int* element_nodes(Index e) const final { return m_elements.data() + e * K; }
+    const Elements& elements() const { return m_elements; }
+
+    ElementVector gather(Index e, const VectorXd& x) const
+    {
+        ElementVector xe;
+        for (int a = 0; a < K; ++a) {
+            xe.template segment<3>(3 * a) = x.template segment<3>(3 * Index(m_elements(e, a)));
+        }
+        return xe;
+    }
+
+    double element_value(Index e, const VectorXd& x) const final
+    {
+        return local_value(e, gather(e, x));
+    }
+    void element_gradient(Index e, const VectorXd& x, double* g) const final
+    {
+        Eigen::Map<ElementVector> out(g);
+        out = local_gradient(e, gather(e, x));
+    }
+    void element_hessian(Index e, const VectorXd& x, bool project, double* H) const final
+    {
+        ElementMatrix h = local_hessian(e, gather(e, x));
+        Eigen::Map<ElementMatrix> out(H);
+        if (project) {
+            out = project_psd(h);
+        } else {
+            out = h;
+        }
+    }
+
+protected:
+    virtual double local_value(Index e, const ElementVector& xe) const = 0;
+    virtual ElementVector local_gradient(Index e, const ElementVector& xe) const = 0;
+    virtual ElementMatrix local_hessian(Index e, const ElementVector& xe) const = 0;
+
+private:
+    Elements m_elements;
+};
+
+/// A weighted sum of energies, E = Σ_k w_k E_k: the incremental potential of
+/// implicit Euler (inertia + elastic + gravity [+ Dirichlet penalty]).
+struct WeightedEnergy {
+    double weight = 1.0;
+    std::shared_ptr<const Energy> energy;
+};
+
+class EnergySum {
+public:
+    EnergySum() = default;
+    explicit EnergySum(std::vector<WeightedEnergy> terms) : m_terms(std::move(terms)) { }
+    void add(std::shared_ptr<const Energy> energy, double weight = 1.0)
+    {
+        m_terms.push_back({weight, std::move(energy)});
+    }
+    const std::vector<WeightedEnergy>& terms() const { return m_terms; }
+
+    double value(const VectorXd& x) const;
+    VectorXd gradient(const VectorXd& x) const;
+    /// Per-term values, in the order of terms() (for logging and metrics).
+    std::vector<double> term_values(const VectorXd& x) const;
+
+private:
+    std::vector<WeightedEnergy> m_terms;
+};
+
+} // namespace lb

@@ -1,0 +1,441 @@
+#include "io/hdf5.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
+#include "core/error.hpp"
+
+namespace lb::h5 {
+namespace {
+
+struct Silence {
+    // HDF5 prints its own error stack to stderr; we report through exceptions.
+    Silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+};
+const Silence g_silence;
+
+class Handle {
+public:
+    Handle(hid_t id, herr_t (*close)(hid_t)) : m_id(id), m_close(close) { }
+    ~Handle()
+    {
+        if (m_id >= 0) m_close(m_id);
+    }
+    Handle(const Handle&) = delete;
+    Handle& operator=(const Handle&) = delete;
+    hid_t get() const { return m_id; }
+    bool valid() const { return m_id >= 0; }
+
+private:
+    hid_t m_id;
+    herr_t (*m_close)(hid_t);
+};
+
+std::string parent_of(const std::string& name)
+{
+    const auto pos = name.find_last_of('/');
+    if (pos == std::string::npos || pos == 0) return "/";
+    return name.substr(0, pos);
+}
+
+} // namespace
+
+File::File(hid_t id, std::string path) : m_id(id), m_path(std::move(path)) { }
+
+File::File(File&& other) noexcept : m_id(other.m_id), m_path(std::move(other.m_path))
+{
+    other.m_id = -1;
+}
+
+File& File::operator=(File&& other) noexcept
+{
+    if (this != &other) {
+        if (m_id >= 0) H5Fclose(m_id);
+        m_id = other.m_id;
+        m_path = std::move(other.m_path);
+        other.m_id = -1;
+    }
+    return *this;
+}
+
+File::~File()
+{
+    if (m_id >= 0) H5Fclose(m_id);
+}
+
+File File::create(const std::string& path)
+{
+    const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (id < 0) throw IoError("cannot create HDF5 file '" + path + "'");
+    return File(id, path);
+}
+
+File File::open(const std::string& path, bool writable)
+{
+    if (!std::filesystem::exists(path)) {
+        throw IoError("HDF5 file '" + path + "' does not exist");
+    }
+    if (H5Fis_hdf5(path.c_str()) <= 0) {
+        throw IoError("'" + path + "' is not an HDF5 file (corrupt or wrong format)");
+    }
+    const hid_t id = H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (id < 0) throw IoError("cannot open HDF5 file '" + path + "'");
+    return File(id, path);
+}
+
+void File::fail(const std::string& what, const std::string& name) const
+{
+    throw IoError("HDF5 file '" + m_path + "', '" + name + "': " + what);
+}
+
+bool File::exists(const std::string& name) const
+{
+    // Check every path component, as H5Lexists requires its parents to exist.
+    std::string partial;
+    size_t start = name[0] == '/' ? 1 : 0;
+    while (start <= name.size()) {
+        size_t end = name.find('/', start);
+        if (end == std::string::npos) end = name.size();
+        partial += "/" + name.substr(start, end - start);
+        if (H5Lexists(m_id, partial.c_str(), H5P_DEFAULT) <= 0) return false;
+        start = end + 1;
+    }
+    return true;
+}
+
+void File::create_group(const std::string& group)
+{
+    if (group.empty() || group == "/" || exists(group)) return;
+    create_group(parent_of(group));
+    Handle g(H5Gcreate2(m_id, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+    if (!g.valid()) fail("cannot create group", group);
+}
+
+void File::write_raw(const std::string& name, const std::vector<hsize_t>& dims, hid_t mem_type,
+                     hid_t file_type, const void* data)
+{
+    create_group(parent_of(name));
+    if (exists(name)) H5Ldelete(m_id, name.c_str(), H5P_DEFAULT);
+    Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr), H5Sclose);
+    Handle set(H5Dcreate2(m_id, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                          H5P_DEFAULT),
+               H5Dclose);
+    if (!set.valid()) fail("cannot create dataset", name);
+    if (H5Dwrite(set.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
+        fail("cannot write dataset", name);
+    }
+}
+
+void File::write(const std::string& name, const MatrixXd& m)
+{
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> r = m;
+    write_raw(name, {hsize_t(m.rows()), hsize_t(m.cols())}, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
+              r.data());
+}
+
+void File::write(const std::string& name, const MatrixXf& m)
+{
+    const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> r = m;
+    write_raw(name, {hsize_t(m.rows()), hsize_t(m.cols())}, H5T_NATIVE_FLOAT, H5T_IEEE_F32LE,
+              r.data());
+}
+
+void File::write(const std::string& name, const VectorXd& v)
+{
+    write_raw(name, {hsize_t(v.size())}, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, v.data());
+}
+
+void File::write(const std::string& name, const MatrixXi& m)
+{
+    const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> r = m;
+    write_raw(name, {hsize_t(m.rows()), hsize_t(m.cols())}, H5T_NATIVE_INT, H5T_STD_I32LE,
+              r.data());
+}
+
+void File::write(const std::string& name, const VectorXi& v)
+{
+    write_raw(name, {hsize_t(v.size())}, H5T_NATIVE_INT, H5T_STD_I32LE, v.data());
+}
+
+void File::write_array(const std::string& name, const std::vector<hsize_t>& dims, const double* data)
+{
+    write_raw(name, dims, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, data);
+}
+
+void File::write_string(const std::string& name, const std::string& s)
+{
+    create_group(parent_of(name));
+    if (exists(name)) H5Ldelete(m_id, name.c_str(), H5P_DEFAULT);
+    Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+    Handle set(H5Dcreate2(m_id, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                          H5P_DEFAULT),
+               H5Dclose);
+    if (!set.valid()) fail("cannot create string dataset", name);
+    const char* ptr = s.c_str();
+    if (H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &ptr) < 0) {
+        fail("cannot write string", name);
+    }
+}
+
+hid_t File::open_dataset(const std::string& name) const
+{
+    if (!exists(name)) fail("dataset missing", name);
+    const hid_t id = H5Dopen2(m_id, name.c_str(), H5P_DEFAULT);
+    if (id < 0) fail("cannot open dataset", name);
+    return id;
+}
+
+std::vector<hsize_t> File::shape(const std::string& name) const
+{
+    Handle set(open_dataset(name), H5Dclose);
+    Handle space(H5Dget_space(set.get()), H5Sclose);
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    if (rank < 0) fail("cannot read shape", name);
+    std::vector<hsize_t> dims(static_cast<size_t>(rank), 0);
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    return dims;
+}
+
+namespace {
+template <typename Scalar>
+Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> read_2d(const File& f, hid_t id,
+                                                              const std::vector<hsize_t>& dims,
+                                                              hid_t mem_type, const std::string& name)
+{
+    const Index rows = dims.empty() ? 1 : Index(dims[0]);
+    Index cols = 1;
+    for (size_t i = 1; i < dims.size(); ++i) cols *= Index(dims[i]);
+    Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> r(rows, cols);
+    if (r.size() > 0 && H5Dread(id, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, r.data()) < 0) {
+        throw IoError("HDF5 file '" + f.path() + "', '" + name + "': cannot read dataset");
+    }
+    return r;
+}
+} // namespace
+
+MatrixXd File::read_matrix(const std::string& name) const
+{
+    const auto dims = shape(name);
+    if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
+    Handle set(open_dataset(name), H5Dclose);
+    return read_2d<double>(*this, set.get(), dims, H5T_NATIVE_DOUBLE, name);
+}
+
+MatrixXf File::read_matrix_float(const std::string& name) const
+{
+    const auto dims = shape(name);
+    if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
+    Handle set(open_dataset(name), H5Dclose);
+    return read_2d<float>(*this, set.get(), dims, H5T_NATIVE_FLOAT, name);
+}
+
+MatrixXi File::read_matrix_int(const std::string& name) const
+{
+    const auto dims = shape(name);
+    if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
+    Handle set(open_dataset(name), H5Dclose);
+    return read_2d<int>(*this, set.get(), dims, H5T_NATIVE_INT, name);
+}
+
+VectorXd File::read_vector(const std::string& name) const
+{
+    const auto dims = shape(name);
+    if (dims.size() != 1) fail("expected a 1-d dataset, found rank " + std::to_string(dims.size()), name);
+    Handle set(open_dataset(name), H5Dclose);
+    VectorXd v = read_2d<double>(*this, set.get(), dims, H5T_NATIVE_DOUBLE, name);
+    return v;
+}
+
+VectorXi File::read_vector_int(const std::string& name) const
+{
+    const auto dims = shape(name);
+    if (dims.size() != 1) fail("expected a 1-d dataset, found rank " + std::to_string(dims.size()), name);
+    Handle set(open_dataset(name), H5Dclose);
+    VectorXi v = read_2d<int>(*this, set.get(), dims, H5T_NATIVE_INT, name);
+    return v;
+}
+
+std::vector<double> File::read_array(const std::string& name, std::vector<hsize_t>& dims) const
+{
+    dims = shape(name);
+    size_t n = 1;
+    for (auto d : dims) n *= size_t(d);
+    std::vector<double> data(n);
+    Handle set(open_dataset(name), H5Dclose);
+    if (n > 0 && H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0) {
+        fail("cannot read dataset", name);
+    }
+    return data;
+}
+
+std::string File::read_string(const std::string& name) const
+{
+    Handle set(open_dataset(name), H5Dclose);
+    Handle type(H5Dget_type(set.get()), H5Tclose);
+    if (H5Tget_class(type.get()) != H5T_STRING) fail("expected a string dataset", name);
+    Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(mem.get(), H5T_VARIABLE);
+    H5Tset_cset(mem.get(), H5T_CSET_UTF8);
+    char* ptr = nullptr;
+    if (H5Dread(set.get(), mem.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &ptr) < 0) {
+        fail("cannot read string", name);
+    }
+    std::string s = ptr ? ptr : "";
+    H5free_memory(ptr);
+    return s;
+}
+
+namespace {
+hid_t open_object(hid_t file, const std::string& path)
+{
+    return H5Oopen(file, path.c_str(), H5P_DEFAULT);
+}
+} // namespace
+
+void File::set_attribute(const std::string& path, const std::string& key, const std::string& value)
+{
+    if (path != "/" && !exists(path)) create_group(path);
+    Handle obj(open_object(m_id, path), H5Oclose);
+    if (!obj.valid()) fail("cannot open object for attribute '" + key + "'", path);
+    if (H5Aexists(obj.get(), key.c_str()) > 0) H5Adelete(obj.get(), key.c_str());
+    Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+    Handle attr(H5Acreate2(obj.get(), key.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                H5Aclose);
+    const char* ptr = value.c_str();
+    if (!attr.valid() || H5Awrite(attr.get(), type.get(), &ptr) < 0) {
+        fail("cannot write attribute '" + key + "'", path);
+    }
+}
+
+namespace {
+template <typename T>
+void set_scalar_attribute(hid_t file, const std::string& path, const std::string& key, T value,
+                          hid_t mem_type, hid_t file_type, const File& f)
+{
+    Handle obj(open_object(file, path), H5Oclose);
+    if (!obj.valid()) throw IoError("HDF5 file '" + f.path() + "', '" + path + "': cannot open object");
+    if (H5Aexists(obj.get(), key.c_str()) > 0) H5Adelete(obj.get(), key.c_str());
+    Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+    Handle attr(H5Acreate2(obj.get(), key.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                H5Aclose);
+    if (!attr.valid() || H5Awrite(attr.get(), mem_type, &value) < 0) {
+        throw IoError("HDF5 file '" + f.path() + "', '" + path + "': cannot write attribute '" + key + "'");
+    }
+}
+} // namespace
+
+void File::set_attribute(const std::string& path, const std::string& key, double value)
+{
+    if (path != "/" && !exists(path)) create_group(path);
+    set_scalar_attribute(m_id, path, key, value, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, *this);
+}
+
+void File::set_attribute(const std::string& path, const std::string& key, long long value)
+{
+    if (path != "/" && !exists(path)) create_group(path);
+    set_scalar_attribute(m_id, path, key, value, H5T_NATIVE_LLONG, H5T_STD_I64LE, *this);
+}
+
+bool File::has_attribute(const std::string& path, const std::string& key) const
+{
+    if (path != "/" && !exists(path)) return false;
+    Handle obj(open_object(m_id, path), H5Oclose);
+    return obj.valid() && H5Aexists(obj.get(), key.c_str()) > 0;
+}
+
+std::string File::attribute_string(const std::string& path, const std::string& key) const
+{
+    if (!has_attribute(path, key)) fail("attribute '" + key + "' missing", path);
+    Handle obj(open_object(m_id, path), H5Oclose);
+    Handle attr(H5Aopen(obj.get(), key.c_str(), H5P_DEFAULT), H5Aclose);
+    Handle ftype(H5Aget_type(attr.get()), H5Tclose);
+    if (H5Tget_class(ftype.get()) != H5T_STRING) fail("attribute '" + key + "' is not a string", path);
+    if (H5Tis_variable_str(ftype.get()) > 0) {
+        Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
+        H5Tset_size(mem.get(), H5T_VARIABLE);
+        H5Tset_cset(mem.get(), H5Tget_cset(ftype.get()));
+        char* ptr = nullptr;
+        if (H5Aread(attr.get(), mem.get(), &ptr) < 0) fail("cannot read attribute '" + key + "'", path);
+        std::string s = ptr ? ptr : "";
+        H5free_memory(ptr);
+        return s;
+    }
+    const size_t n = H5Tget_size(ftype.get());
+    std::string s(n, '\0');
+    if (H5Aread(attr.get(), ftype.get(), s.data()) < 0) fail("cannot read attribute '" + key + "'", path);
+    s.resize(std::strlen(s.c_str()));
+    return s;
+}
+
+double File::attribute_double(const std::string& path, const std::string& key) const
+{
+    if (!has_attribute(path, key)) fail("attribute '" + key + "' missing", path);
+    Handle obj(open_object(m_id, path), H5Oclose);
+    Handle attr(H5Aopen(obj.get(), key.c_str(), H5P_DEFAULT), H5Aclose);
+    double value = 0.0;
+    if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &value) < 0) fail("cannot read attribute '" + key + "'", path);
+    return value;
+}
+
+long long File::attribute_int(const std::string& path, const std::string& key) const
+{
+    if (!has_attribute(path, key)) fail("attribute '" + key + "' missing", path);
+    Handle obj(open_object(m_id, path), H5Oclose);
+    Handle attr(H5Aopen(obj.get(), key.c_str(), H5P_DEFAULT), H5Aclose);
+    long long value = 0;
+    if (H5Aread(attr.get(), H5T_NATIVE_LLONG, &value) < 0) fail("cannot read attribute '" + key + "'", path);
+    return value;
+}
+
+std::vector<std::string> File::list(const std::string& group) const
+{
+    if (group != "/" && !exists(group)) fail("group missing", group);
+    Handle g(H5Gopen2(m_id, group.c_str(), H5P_DEFAULT), H5Gclose);
+    if (!g.valid()) fail("not a group", group);
+    H5G_info_t info;
+    H5Gget_info(g.get(), &info);
+    std::vector<std::string> names;
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+        const ssize_t n = H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0,
+                                             H5P_DEFAULT);
+        std::string name(size_t(n), '\0');
+        H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), size_t(n) + 1,
+                           H5P_DEFAULT);
+        names.push_back(name);
+    }
+    return names;
+}
+
+void File::flush() { H5Fflush(m_id, H5F_SCOPE_GLOBAL); }
+
+AtomicOutput::AtomicOutput(std::string final_path)
+    : m_final(std::move(final_path)), m_temp(m_final + ".tmp-" + std::to_string(::getpid()))
+{
+}
+
+AtomicOutput::~AtomicOutput()
+{
+    if (!m_committed) {
+        std::error_code ec;
+        std::filesystem::remove(m_temp, ec);
+    }
+}
+
+void AtomicOutput::commit()
+{
+    std::error_code ec;
+    std::filesystem::rename(m_temp, m_final, ec);
+    if (ec) throw IoError("cannot move '" + m_temp + "' to '" + m_final + "': " + ec.message());
+    m_committed = true;
+}
+
+} // namespace lb::h5

@@ -1,0 +1,95 @@
+#pragma once
+// Thin RAII wrapper over the HDF5 C API. Matrices are stored row-major as
+// rows×cols datasets (what h5py/NumPy read naturally); intermediate groups are
+// created on demand; every failure throws lb::IoError naming file and dataset.
+#include <hdf5.h>
+
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace lb::h5 {
+
+class File {
+public:
+    /// Create (truncate) a file for writing.
+    static File create(const std::string& path);
+    /// Open an existing file; throws IoError if missing or not HDF5.
+    static File open(const std::string& path, bool writable = false);
+
+    File(File&& other) noexcept;
+    File& operator=(File&& other) noexcept;
+    File(const File&) = delete;
+    File& operator=(const File&) = delete;
+    ~File();
+
+    const std::string& path() const { return m_path; }
+    bool exists(const std::string& name) const;
+
+    void write(const std::string& name, const MatrixXd& m);
+    void write(const std::string& name, const MatrixXf& m);
+    void write(const std::string& name, const VectorXd& v);
+    void write(const std::string& name, const MatrixXi& m);
+    void write(const std::string& name, const VectorXi& v);
+    /// n-d array of doubles, row-major (C order) `data` of product(dims) entries.
+    void write_array(const std::string& name, const std::vector<hsize_t>& dims, const double* data);
+    void write_string(const std::string& name, const std::string& s);
+
+    MatrixXd read_matrix(const std::string& name) const;
+    MatrixXf read_matrix_float(const std::string& name) const;
+    VectorXd read_vector(const std::string& name) const;
+    MatrixXi read_matrix_int(const std::string& name) const;
+    VectorXi read_vector_int(const std::string& name) const;
+    /// n-d array of doubles as a flat row-major vector; dims returned through `dims`.
+    std::vector<double> read_array(const std::string& name, std::vector<hsize_t>& dims) const;
+    std::string read_string(const std::string& name) const;
+    std::vector<hsize_t> shape(const std::string& name) const;
+
+    /// Attributes on a group or dataset ("/" for the file root). Overwrites.
+    void set_attribute(const std::string& path, const std::string& key, const std::string& value);
+    void set_attribute(const std::string& path, const std::string& key, double value);
+    void set_attribute(const std::string& path, const std::string& key, long long value);
+    bool has_attribute(const std::string& path, const std::string& key) const;
+    std::string attribute_string(const std::string& path, const std::string& key) const;
+    double attribute_double(const std::string& path, const std::string& key) const;
+    long long attribute_int(const std::string& path, const std::string& key) const;
+
+    /// Names of the members of a group, sorted.
+    std::vector<std::string> list(const std::string& group) const;
+    /// Create a group (and parents) if it does not exist.
+    void create_group(const std::string& group);
+
+    void flush();
+
+private:
+    File(hid_t id, std::string path);
+    hid_t m_id = -1;
+    std::string m_path;
+
+    void write_raw(const std::string& name, const std::vector<hsize_t>& dims, hid_t mem_type,
+                   hid_t file_type, const void* data);
+    hid_t open_dataset(const std::string& name) const;
+    [[noreturn]] void fail(const std::string& what, const std::string& name) const;
+};
+
+/// Writes to `<final>.tmp-<pid>` and renames onto `final` on commit(); if the
+/// object is destroyed without commit() (an exception), the temporary is removed.
+/// This keeps bad input from leaving half-written output behind.
+class AtomicOutput {
+public:
+    explicit AtomicOutput(std::string final_path);
+    ~AtomicOutput();
+    AtomicOutput(const AtomicOutput&) = delete;
+    AtomicOutput& operator=(const AtomicOutput&) = delete;
+    const std::string& temp_path() const { return m_temp; }
+    const std::string& final_path() const { return m_final; }
+    void commit();
+
+private:
+    std::string m_final;
+    std::string m_temp;
+    bool m_committed = false;
+};
+
+} // namespace lb::h5

@@ -1,0 +1,146 @@
+#include "solver/newton.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/timer.hpp"
+
+namespace lb {
+
+std::string to_string(NewtonTermination t)
+{
+    switch (t) {
+    case NewtonTermination::Converged: return "converged";
+    case NewtonTermination::SmallStep: return "small step";
+    case NewtonTermination::MaxIterations: return "iteration cap reached";
+    case NewtonTermination::LineSearchFailed: return "line search failed";
+    case NewtonTermination::FactorizationFailed: return "factorisation failed";
+    case NewtonTermination::NonFinite: return "non-finite energy or gradient";
+    }
+    return "unknown";
+}
+
+std::string NewtonSummary::brief() const
+{
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%s in %d it, residual %.3g, %d halvings, %d regularisations, %.2f ms",
+                  to_string(termination).c_str(), iterations, residual, line_search_halvings,
+                  regularizations, seconds * 1e3);
+    return message.empty() ? buf : std::string(buf) + " (" + message + ")";
+}
+
+NewtonSolver::NewtonSolver(const VectorXi& dof_to_unknown, const EnergySum& energies,
+                           NewtonOptions options)
+    : m_options(options), m_assembler(dof_to_unknown, energies)
+{
+    const SparseMatrixd& A = m_assembler.matrix();
+    m_diagonal.resize(size_t(A.cols()));
+    for (Index j = 0; j < A.cols(); ++j) {
+        // Lower triangle, sorted: the diagonal is the first entry of each column.
+        m_diagonal[size_t(j)] = A.outerIndexPtr()[j];
+    }
+    m_cholesky.analyze(A);
+}
+
+NewtonSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
+{
+    Timer timer;
+    NewtonSummary summary;
+    const NewtonOptions& opt = m_options;
+    const double gtol = opt.gradient_tolerance * opt.force_scale;
+
+    double energy = energies.value(x);
+    VectorXd g = m_assembler.restrict(energies.gradient(x));
+    for (summary.iterations = 0; summary.iterations < opt.max_iterations; ++summary.iterations) {
+        const double gnorm = g.norm();
+        summary.residual = gnorm / opt.force_scale;
+        if (!std::isfinite(energy) || !std::isfinite(gnorm)) {
+            summary.termination = NewtonTermination::NonFinite;
+            break;
+        }
+        if (gnorm <= gtol) {
+            summary.termination = NewtonTermination::Converged;
+            break;
+        }
+
+        // Newton direction, regularised until it is a descent direction.
+        m_assembler.assemble(energies, x, opt.project_psd);
+        SparseMatrixd& A = const_cast<SparseMatrixd&>(m_assembler.matrix());
+        double mean_diag = 0.0;
+        for (Index i : m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
+        mean_diag = std::max(mean_diag / double(std::max<size_t>(m_diagonal.size(), 1)), 1e-300);
+        VectorXd dx;
+        double mu = 0.0;
+        bool have_direction = false;
+        for (int attempt = 0; attempt <= opt.max_regularizations; ++attempt) {
+            const FactorStatus status = m_cholesky.factorize(A);
+            if (status == FactorStatus::Fatal) {
+                summary.message = m_cholesky.message();
+                break;
+            }
+            if (status == FactorStatus::Success) {
+                dx = -m_cholesky.solve(g);
+                if (dx.allFinite() && g.dot(dx) < 0.0) {
+                    have_direction = true;
+                    break;
+                }
+            }
+            const double next_mu = mu == 0.0 ? opt.initial_regularization * mean_diag : mu * 10.0;
+            for (Index i : m_diagonal) A.valuePtr()[i] += next_mu - mu;
+            mu = next_mu;
+            ++summary.regularizations;
+        }
+        if (!have_direction) {
+            summary.termination = NewtonTermination::FactorizationFailed;
+            if (summary.message.empty()) summary.message = "no descent direction after regularisation";
+            break;
+        }
+
+        // Backtracking Armijo line search on the full energy.
+        const double slope = g.dot(dx);
+        double alpha = 1.0;
+        VectorXd x_trial = x;
+        double trial_energy = energy;
+        bool accepted = false;
+        for (int ls = 0; ls < opt.max_line_search; ++ls) {
+            x_trial = x;
+            m_assembler.add_prolonged(alpha * dx, x_trial);
+            trial_energy = energies.value(x_trial);
+            if (std::isfinite(trial_energy) && trial_energy <= energy + opt.armijo_c * alpha * slope) {
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+            ++summary.line_search_halvings;
+        }
+        const double step = alpha * dx.lpNorm<Eigen::Infinity>();
+        if (!accepted) {
+            // At the precision floor the energy cannot decrease measurably: a tiny
+            // full step means we are converged to round-off.
+            if (dx.lpNorm<Eigen::Infinity>() <= opt.step_tolerance * opt.length_scale * 1e3) {
+                summary.termination = NewtonTermination::SmallStep;
+            } else {
+                summary.termination = NewtonTermination::LineSearchFailed;
+                summary.message = "no sufficient decrease after " + std::to_string(opt.max_line_search) + " halvings";
+            }
+            break;
+        }
+        x.swap(x_trial);
+        energy = trial_energy;
+        g = m_assembler.restrict(energies.gradient(x));
+        if (step <= opt.step_tolerance * opt.length_scale) {
+            summary.residual = g.norm() / opt.force_scale;
+            summary.termination = NewtonTermination::SmallStep;
+            ++summary.iterations;
+            break;
+        }
+    }
+    if (summary.iterations >= opt.max_iterations) {
+        summary.residual = g.norm() / opt.force_scale;
+        summary.termination = g.norm() <= gtol ? NewtonTermination::Converged : NewtonTermination::MaxIterations;
+    }
+    summary.seconds = timer.seconds();
+    return summary;
+}
+
+} // namespace lb

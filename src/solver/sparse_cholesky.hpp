@@ -1,0 +1,43 @@
+#pragma once
+// Sparse Cholesky (CHOLMOD supernodal LLᵀ through Eigen's CholmodSupport)
+// behind a small wrapper: analyse the pattern once, factorise each Newton
+// iteration, report a status instead of throwing.
+#include <memory>
+#include <string>
+
+#include "core/types.hpp"
+
+namespace lb {
+
+enum class FactorStatus {
+    Success,
+    /// Not positive definite: recoverable by regularisation (add μI, retry).
+    NotPositiveDefinite,
+    /// Anything else (out of memory, NaN entries): the solve cannot continue.
+    Fatal,
+};
+
+class SparseCholesky {
+public:
+    SparseCholesky();
+    ~SparseCholesky();
+    SparseCholesky(const SparseCholesky&) = delete;
+    SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+    /// Symbolic analysis of the lower-triangular pattern; call once per pattern.
+    void analyze(const SparseMatrixd& lower);
+    /// Numeric factorisation (values may change, pattern may not).
+    FactorStatus factorize(const SparseMatrixd& lower);
+    /// Solve A x = b with the last successful factorisation.
+    VectorXd solve(const VectorXd& b) const;
+    const std::string& message() const { return m_message; }
+    bool analyzed() const { return m_analyzed; }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+    bool m_analyzed = false;
+    std::string m_message;
+};
+
+} // namespace lb
