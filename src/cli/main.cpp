@@ -1,1 +1,35 @@
-int main() { return 0; }
+// latentbench: command-line entry point. See README.md for every subcommand.
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/log.hpp"
+
+int main(int argc, char** argv)
+{
+    CLI::App app{"latentbench: latent-space integrators for deformable simulation, benchmarked"};
+    app.require_subcommand(1);
+    bool quiet = false, verbose = false;
+    app.add_flag("-q,--quiet", quiet, "Only print errors and results");
+    app.add_flag("-v,--verbose", verbose, "Print debug messages");
+    app.parse_complete_callback([&] {
+        lb::set_log_level(quiet ? lb::LogLevel::Quiet : verbose ? lb::LogLevel::Debug : lb::LogLevel::Info);
+    });
+    lb::cli::register_simulate(app);
+    lb::cli::register_info(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const lb::Error& e) {
+        std::fprintf(stderr, "latentbench: error: %s\n", e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "latentbench: internal error: %s\n", e.what());
+        return 2;
+    }
+    return 0;
+}

@@ -58,7 +58,9 @@ public:
     static constexpr int kDofs = 3 * K;
     using ElementVector = Eigen::Matrix<double, kDofs, 1>;
     using ElementMatrix = Eigen::Matrix<double, kDofs, kDofs>;
-    using Elements = Eigen::Matrix<int, Eigen::Dynamic, K, Eigen::RowMajor>;
+    // Row-major so element e's K nodes are contiguous; Eigen forbids RowMajor on a
+    // single-column matrix, and for K = 1 column-major has the same layout.
+    using Elements = Eigen::Matrix<int, Eigen::Dynamic, K, (K == 1 ? Eigen::ColMajor : Eigen::RowMajor)>;
 
     explicit ElementEnergy(Elements elements) : m_elements(std::move(elements)) { }
 

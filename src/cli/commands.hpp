@@ -1,0 +1,11 @@
+#pragma once
+// Each subcommand registers itself on the CLI11 app; its callback runs the work
+// and throws lb::Error on bad input (main prints it and exits non-zero).
+#include <CLI/CLI.hpp>
+
+namespace lb::cli {
+
+void register_simulate(CLI::App& app);
+void register_info(CLI::App& app);
+
+} // namespace lb::cli

@@ -1,0 +1,49 @@
+#include "energy/inertia_energy.hpp"
+
+#include <sstream>
+
+#include "core/error.hpp"
+#include "energy/element_input.hpp"
+
+namespace lb {
+
+InertiaEnergy::InertiaEnergy(VectorXd masses, double dt)
+    : ElementEnergy<1>(detail::vertex_elements(masses.size())),
+      m_masses(std::move(masses)),
+      m_dt(dt),
+      m_inv_dt2(1.0 / (dt * dt)),
+      m_x_tilde(VectorXd::Zero(3 * m_masses.size()))
+{
+    detail::require_positive(dt, "InertiaEnergy", "time step dt");
+    if (m_masses.size() > 0 && !(m_masses.minCoeff() >= 0.0)) {
+        throw Error("InertiaEnergy: vertex masses must be non-negative");
+    }
+}
+
+void InertiaEnergy::set_x_tilde(const VectorXd& x_tilde)
+{
+    if (x_tilde.size() != m_x_tilde.size()) {
+        std::ostringstream msg;
+        msg << "InertiaEnergy::set_x_tilde: expected " << m_x_tilde.size() << " values (3N), got "
+            << x_tilde.size();
+        throw Error(msg.str());
+    }
+    m_x_tilde = x_tilde;
+}
+
+double InertiaEnergy::local_value(Index i, const ElementVector& xe) const
+{
+    return 0.5 * m_inv_dt2 * m_masses[i] * (xe - m_x_tilde.segment<3>(3 * i)).squaredNorm();
+}
+
+InertiaEnergy::ElementVector InertiaEnergy::local_gradient(Index i, const ElementVector& xe) const
+{
+    return m_inv_dt2 * m_masses[i] * (xe - m_x_tilde.segment<3>(3 * i));
+}
+
+InertiaEnergy::ElementMatrix InertiaEnergy::local_hessian(Index i, const ElementVector&) const
+{
+    return m_inv_dt2 * m_masses[i] * ElementMatrix::Identity();
+}
+
+} // namespace lb

@@ -1,0 +1,39 @@
+#pragma once
+// Inertia term of implicit Euler as minimisation (Martin et al. 2011).
+//
+//   element   E_i = m_i / (2h²) |x_i − x̃_i|²   (one vertex per element)
+//   mesh      E = 1/(2h²) (x − x̃)ᵀ M (x − x̃),  M = diag(m) ⊗ I₃ lumped,
+//             x̃ = 2 x_{t−1} − x_{t−2} the inertial target (set each step)
+//   Hessian   M / h² (constant, PSD)
+#include "energy/energy.hpp"
+
+namespace lb {
+
+class InertiaEnergy final : public ElementEnergy<1> {
+public:
+    /// @param masses  N lumped vertex masses (kg), non-negative
+    /// @param dt      time step h (s)
+    /// x̃ starts at zero: call set_x_tilde before evaluating.
+    InertiaEnergy(VectorXd masses, double dt);
+
+    std::string name() const override { return "inertia"; }
+
+    /// @param x_tilde  3N inertial target 2 x_{t−1} − x_{t−2}, xyz interleaved
+    void set_x_tilde(const VectorXd& x_tilde);
+    const VectorXd& x_tilde() const { return m_x_tilde; }
+    const VectorXd& masses() const { return m_masses; }
+    double dt() const { return m_dt; }
+
+protected:
+    double local_value(Index i, const ElementVector& xe) const override;
+    ElementVector local_gradient(Index i, const ElementVector& xe) const override;
+    ElementMatrix local_hessian(Index i, const ElementVector& xe) const override;
+
+private:
+    VectorXd m_masses;
+    double m_dt;
+    double m_inv_dt2;
+    VectorXd m_x_tilde;
+};
+
+} // namespace lb

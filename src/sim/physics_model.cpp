@@ -1,0 +1,115 @@
+#include "sim/physics_model.hpp"
+
+#include "core/error.hpp"
+#include "energy/dirichlet_penalty.hpp"
+#include "energy/gravity_energy.hpp"
+#include "energy/inertia_energy.hpp"
+#include "energy/rod_bending.hpp"
+#include "energy/rod_stretching.hpp"
+#include "energy/shell_hinge_bending.hpp"
+#include "energy/shell_membrane.hpp"
+#include "energy/tet_stvk.hpp"
+
+namespace lb {
+
+PhysicsSpec physics_spec(const Scene& scene)
+{
+    return {scene.mesh, scene.material, scene.dt, scene.gravity, scene.bc_indices};
+}
+
+PhysicsModel::PhysicsModel(PhysicsSpec spec) : m_spec(std::move(spec))
+{
+    const Mesh& mesh = m_spec.mesh;
+    const Material& mat = m_spec.material;
+    m_masses = lumped_masses(mesh, mat.density, mat.thickness, mat.radius);
+    switch (mesh.kind) {
+    case MeshKind::Rods:
+        m_elastic.push_back(std::make_shared<RodStretching>(mesh.rest_positions, mesh.elements,
+                                                            mat.youngs_modulus, mat.radius));
+        m_elastic.push_back(std::make_shared<RodBending>(mesh.rest_positions, rod_bending_stencils(mesh),
+                                                         mat.youngs_modulus, mat.radius));
+        break;
+    case MeshKind::Shell:
+        m_elastic.push_back(std::make_shared<ShellMembrane>(mesh.rest_positions, mesh.elements,
+                                                            mat.youngs_modulus, mat.poisson_ratio,
+                                                            mat.thickness));
+        m_elastic.push_back(std::make_shared<ShellHingeBending>(
+            mesh.rest_positions, shell_hinge_stencils(mesh.elements), mat.youngs_modulus,
+            mat.poisson_ratio, mat.thickness));
+        break;
+    case MeshKind::Solid:
+        m_elastic.push_back(std::make_shared<TetStVK>(mesh.rest_positions, mesh.elements,
+                                                      mat.youngs_modulus, mat.poisson_ratio));
+        break;
+    }
+    m_gravity = std::make_shared<GravityEnergy>(m_masses, m_spec.gravity);
+    m_length_scale = mesh.bounding_box_diagonal();
+    m_force_scale = m_masses.sum() * (m_spec.gravity.norm() + m_length_scale / (m_spec.dt * m_spec.dt));
+    for (int i : m_spec.bc_indices) {
+        if (i < 0 || i >= mesh.num_vertices()) throw Error("Dirichlet index out of range");
+    }
+}
+
+VectorXi PhysicsModel::dof_to_unknown() const
+{
+    VectorXi map = VectorXi::Zero(num_dofs());
+    for (int i : m_spec.bc_indices) map.segment<3>(3 * i).setConstant(-1);
+    int next = 0;
+    for (Index d = 0; d < map.size(); ++d) {
+        if (map[d] >= 0) map[d] = next++;
+    }
+    return map;
+}
+
+VectorXd PhysicsModel::rest_state() const { return flatten(m_spec.mesh.rest_positions); }
+
+double PhysicsModel::elastic_energy(const VectorXd& x) const
+{
+    double e = 0.0;
+    for (const auto& term : m_elastic) e += term->value(x);
+    return e;
+}
+
+double PhysicsModel::kinetic_energy(const VectorXd& x, const VectorXd& x_prev) const
+{
+    const double inv_h = 1.0 / m_spec.dt;
+    double e = 0.0;
+    for (Index i = 0; i < num_vertices(); ++i) {
+        e += 0.5 * m_masses[i] * ((x.segment<3>(3 * i) - x_prev.segment<3>(3 * i)) * inv_h).squaredNorm();
+    }
+    return e;
+}
+
+void PhysicsModel::apply_bc(const MatrixX3d& targets, VectorXd& x) const
+{
+    for (size_t b = 0; b < m_spec.bc_indices.size(); ++b) {
+        x.segment<3>(3 * m_spec.bc_indices[b]) = targets.row(Index(b)).transpose();
+    }
+}
+
+IncrementalPotential::IncrementalPotential(const PhysicsModel& model, double penalty_weight)
+{
+    m_inertia = std::make_shared<InertiaEnergy>(model.masses(), model.dt());
+    m_sum.add(m_inertia);
+    for (const auto& term : model.elastic_terms()) m_sum.add(term);
+    m_sum.add(model.gravity());
+    if (penalty_weight > 0.0) {
+        m_penalty = std::make_shared<DirichletPenalty>(model.bc_indices(), penalty_weight);
+        m_sum.add(m_penalty);
+    }
+    m_x_tilde = model.rest_state();
+    m_inertia->set_x_tilde(m_x_tilde);
+}
+
+void IncrementalPotential::set_previous(const VectorXd& x_prev, const VectorXd& x_prev2)
+{
+    m_x_tilde = 2.0 * x_prev - x_prev2;
+    m_inertia->set_x_tilde(m_x_tilde);
+}
+
+void IncrementalPotential::set_bc_targets(const MatrixX3d& targets)
+{
+    if (m_penalty) m_penalty->set_targets(targets);
+}
+
+} // namespace lb

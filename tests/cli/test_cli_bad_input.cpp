@@ -1,0 +1,118 @@
+// Bad input through the CLI: a message naming the problem, a non-zero exit,
+// and no output file left behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "support/cli_runner.hpp"
+
+namespace lb {
+namespace {
+
+using testing::fresh_dir;
+using testing::run_cli;
+using testing::write_file;
+namespace fs = std::filesystem;
+
+const char* kScene = R"(
+name = "tiny"
+object = "solid"
+[mesh]
+generator = "tet_beam"
+nx = 2
+ny = 1
+nz = 1
+size = [0.2, 0.1, 0.1]
+[material]
+youngs_modulus = 1e5
+density = 1000.0
+[[dirichlet.region]]
+min = [0.0, 0.0, 0.0]
+max = [0.0, 1.0, 1.0]
+[[sequences]]
+frames = 4
+)";
+
+struct BadCase {
+    std::string name;
+    std::string text;
+    std::string expected;  // substring of the error message
+};
+
+void expect_rejected(const BadCase& c)
+{
+    const std::string dir = fresh_dir("cli_" + c.name);
+    const std::string scene = dir + "/scene.toml";
+    const std::string out = dir + "/out.h5";
+    write_file(scene, c.text);
+    const auto result = run_cli("simulate " + scene + " -o " + out);
+    EXPECT_NE(result.exit_code, 0) << c.name << ": " << result.output;
+    EXPECT_NE(result.output.find(c.expected), std::string::npos) << c.name << ": " << result.output;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+        EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos)
+            << "temporary file left behind: " << entry.path();
+    }
+}
+
+std::string with(std::string text, const std::string& from, const std::string& to)
+{
+    text.replace(text.find(from), from.size(), to);
+    return text;
+}
+
+TEST(CliBadInput, MalformedToml) { expect_rejected({"malformed", "name = \"tiny\n[mesh", "malformed TOML"}); }
+
+TEST(CliBadInput, UnknownKey)
+{
+    expect_rejected({"unknown_key", with(kScene, "nz = 1", "nz = 1\ncells = 3"), "unknown key 'mesh.cells'"});
+}
+
+TEST(CliBadInput, MissingMeshFile)
+{
+    expect_rejected({"missing_mesh",
+                     with(kScene, "generator = \"tet_beam\"", "generator = \"tetgen\"\nnode = \"no/such.node\"\nele = \"no/such.ele\"")
+                         .replace(0, 0, ""),
+                     "no/such.node"});
+}
+
+TEST(CliBadInput, NaNInConfigValue)
+{
+    expect_rejected({"nan_value", with(kScene, "1e5", "nan"), "material.youngs_modulus"});
+}
+
+TEST(CliBadInput, MissingSceneFile)
+{
+    const std::string dir = fresh_dir("cli_missing_scene");
+    const auto result = run_cli("simulate " + dir + "/none.toml -o " + dir + "/out.h5");
+    EXPECT_NE(result.exit_code, 0);
+    EXPECT_NE(result.output.find("none.toml"), std::string::npos) << result.output;
+    EXPECT_FALSE(fs::exists(dir + "/out.h5"));
+}
+
+TEST(CliBadInput, CorruptDataset)
+{
+    const std::string dir = fresh_dir("cli_corrupt");
+    write_file(dir + "/bad.h5", "this is not HDF5");
+    auto result = run_cli("info " + dir + "/bad.h5");
+    EXPECT_NE(result.exit_code, 0);
+    EXPECT_NE(result.output.find("not an HDF5 file"), std::string::npos) << result.output;
+    result = run_cli("info " + dir + "/missing.h5");
+    EXPECT_NE(result.exit_code, 0);
+    EXPECT_NE(result.output.find("does not exist"), std::string::npos) << result.output;
+}
+
+TEST(Cli, SimulateWritesReadableDataset)
+{
+    const std::string dir = fresh_dir("cli_ok");
+    write_file(dir + "/scene.toml", kScene);
+    const auto result = run_cli("simulate " + dir + "/scene.toml -o " + dir + "/out.h5");
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    EXPECT_TRUE(fs::exists(dir + "/out.h5"));
+    const auto info = run_cli("info " + dir + "/out.h5");
+    EXPECT_EQ(info.exit_code, 0) << info.output;
+    EXPECT_NE(info.output.find("tiny"), std::string::npos) << info.output;
+}
+
+} // namespace
+} // namespace lb
