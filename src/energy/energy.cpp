@@ -1,5 +1,7 @@
 #include "energy/energy.hpp"
 
+#include "core/parallel.hpp"
+
 #include <vector>
 
 namespace lb {
@@ -8,7 +10,7 @@ double Energy::value(const VectorXd& x) const
 {
     double sum = 0.0;
     const Index n = num_elements();
-#pragma omp parallel for reduction(+ : sum) schedule(static) if (n > 256)
+#pragma omp parallel for reduction(+ : sum) schedule(static) if (n >= kParallelElementThreshold)
     for (Index e = 0; e < n; ++e) {
         sum += element_value(e, x);
     }
@@ -23,7 +25,7 @@ void Energy::add_gradient(const VectorXd& x, double weight, VectorXd& g) const
     // Element gradients are computed in parallel, then scattered serially
     // (elements share vertices, so a parallel scatter would race).
     std::vector<double> local(static_cast<size_t>(n * dofs));
-#pragma omp parallel for schedule(static) if (n > 256)
+#pragma omp parallel for schedule(static) if (n >= kParallelElementThreshold)
     for (Index e = 0; e < n; ++e) {
         element_gradient(e, x, local.data() + e * dofs);
     }

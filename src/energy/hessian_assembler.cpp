@@ -1,5 +1,7 @@
 #include "energy/hessian_assembler.hpp"
 
+#include "core/parallel.hpp"
+
 #include <cassert>
 
 #include "core/error.hpp"
@@ -92,7 +94,7 @@ void HessianAssembler::assemble(const EnergySum& energies, const VectorXd& x, bo
         const size_t block = size_t(dofs * dofs);
         std::vector<double>& buffer = m_buffers[k];
         buffer.resize(size_t(n) * block);
-#pragma omp parallel for schedule(dynamic, 64) if (n > 64)
+#pragma omp parallel for schedule(dynamic, 64) if (n >= kParallelElementThreshold)
         for (Index e = 0; e < n; ++e) {
             energy.element_hessian(e, x, project_psd, buffer.data() + size_t(e) * block);
         }

@@ -21,6 +21,8 @@ public:
     Index num_unknowns() const { return m_num_unknowns; }
     /// Lower triangle of the assembled matrix; its pattern never changes.
     const SparseMatrixd& matrix() const { return m_matrix; }
+    /// Values may be changed in place (e.g. a diagonal shift), never the pattern.
+    SparseMatrixd& mutable_matrix() { return m_matrix; }
 
     /// Overwrite matrix() values with Σ_k w_k H_k(x) (element Hessians PSD-projected if
     /// `project_psd`). `energies` must have the same terms as at construction.

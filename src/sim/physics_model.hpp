@@ -52,7 +52,7 @@ public:
     /// ½ Σ m_i |(x_i − x_prev_i)/h|².
     double kinetic_energy(const VectorXd& x, const VectorXd& x_prev) const;
     /// Length scale (rest bounding-box diagonal, m) and force scale (N) used to make
-    /// solver tolerances and residuals dimensionless: total mass × (|g| + L/h²).
+    /// solver tolerances and residuals dimensionless: mean vertex mass × (|g| + L/h²).
     double length_scale() const { return m_length_scale; }
     double force_scale() const { return m_force_scale; }
     /// Overwrite the Dirichlet vertices of x with targets (B×3).

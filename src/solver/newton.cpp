@@ -42,6 +42,34 @@ NewtonSolver::NewtonSolver(const VectorXi& dof_to_unknown, const EnergySum& ener
     m_cholesky.analyze(A);
 }
 
+bool NewtonSolver::solve_direction(const VectorXd& g, bool regularize, VectorXd& dx, NewtonSummary& summary)
+{
+    SparseMatrixd& A = m_assembler.mutable_matrix();
+    double mean_diag = 0.0;
+    for (Index i : m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
+    mean_diag = std::max(mean_diag / double(std::max<size_t>(m_diagonal.size(), 1)), 1e-300);
+    double mu = 0.0;
+    const int attempts = regularize ? m_options.max_regularizations : 0;
+    for (int attempt = 0; attempt <= attempts; ++attempt) {
+        if (attempt > 0) {
+            const double next_mu = mu == 0.0 ? m_options.initial_regularization * mean_diag : mu * 10.0;
+            for (Index i : m_diagonal) A.valuePtr()[i] += next_mu - mu;
+            mu = next_mu;
+            ++summary.regularizations;
+        }
+        const FactorStatus status = m_cholesky.factorize(A);
+        if (status == FactorStatus::Fatal) {
+            summary.message = m_cholesky.message();
+            return false;
+        }
+        if (status == FactorStatus::Success) {
+            dx = -m_cholesky.solve(g);
+            if (dx.allFinite() && g.dot(dx) < 0.0) return true;
+        }
+    }
+    return false;
+}
+
 NewtonSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
 {
     Timer timer;
@@ -63,32 +91,20 @@ NewtonSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
             break;
         }
 
-        // Newton direction, regularised until it is a descent direction.
-        m_assembler.assemble(energies, x, opt.project_psd);
-        SparseMatrixd& A = const_cast<SparseMatrixd&>(m_assembler.matrix());
-        double mean_diag = 0.0;
-        for (Index i : m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
-        mean_diag = std::max(mean_diag / double(std::max<size_t>(m_diagonal.size(), 1)), 1e-300);
+        // Newton direction: exact Hessian first (Adaptive), then projected, then
+        // regularised with μI until it factorises and gives a descent direction.
         VectorXd dx;
-        double mu = 0.0;
         bool have_direction = false;
-        for (int attempt = 0; attempt <= opt.max_regularizations; ++attempt) {
-            const FactorStatus status = m_cholesky.factorize(A);
-            if (status == FactorStatus::Fatal) {
-                summary.message = m_cholesky.message();
-                break;
-            }
-            if (status == FactorStatus::Success) {
-                dx = -m_cholesky.solve(g);
-                if (dx.allFinite() && g.dot(dx) < 0.0) {
-                    have_direction = true;
-                    break;
-                }
-            }
-            const double next_mu = mu == 0.0 ? opt.initial_regularization * mean_diag : mu * 10.0;
-            for (Index i : m_diagonal) A.valuePtr()[i] += next_mu - mu;
-            mu = next_mu;
-            ++summary.regularizations;
+        const bool try_exact = opt.projection != NewtonOptions::Projection::Always;
+        const bool allow_projected = opt.projection != NewtonOptions::Projection::Never;
+        if (try_exact) {
+            m_assembler.assemble(energies, x, false);
+            have_direction = solve_direction(g, /*regularize=*/!allow_projected, dx, summary);
+        }
+        if (!have_direction && allow_projected && summary.message.empty()) {
+            m_assembler.assemble(energies, x, true);
+            ++summary.projected_iterations;
+            have_direction = solve_direction(g, /*regularize=*/true, dx, summary);
         }
         if (!have_direction) {
             summary.termination = NewtonTermination::FactorizationFailed;

@@ -2,9 +2,17 @@
 // Newton's method with backtracking Armijo line search for
 //   min_x E(x),  E = Σ_k w_k E_k,
 // over the unknown DOFs (prescribed DOFs are removed from the system and keep
-// the values they have in the initial x). Every element Hessian is projected
-// to PSD; if the factorisation still fails or the direction is not a descent
-// direction, μI is added (μ growing ×10) and the solve retried.
+// the values they have in the initial x).
+//
+// Hessian policy (HessianProjection): element Hessians projected to PSD by
+// eigenvalue clamping (Always), or — the default — the exact Hessian first and
+// the projected one only if the exact one does not factorise or gives no
+// descent direction (Adaptive). Clamping changes the Hessian of compressed
+// membranes and tets enough to make Newton converge linearly (the full cloth
+// scene stalls at a residual of 1e-3 within 100 iterations with Always); the
+// inertia term usually keeps the exact global Hessian positive definite, so
+// Adaptive keeps quadratic convergence and skips the eigendecompositions. If
+// the projected matrix still fails, μI is added (μ growing ×10) and retried.
 #include <string>
 
 #include "energy/energy.hpp"
@@ -20,7 +28,8 @@ struct NewtonOptions {
     /// Converged when ||Δx||_∞ ≤ step_tolerance · length_scale (a tiny step).
     double step_tolerance = 1e-9;
     /// Force scale (N) and length scale (m) of the two tests above; set by the caller
-    /// from the problem (see FullSpaceSimulator): total weight + inertial force, bbox diagonal.
+    /// from the problem (see PhysicsModel::force_scale): the force that moves a mean
+    /// vertex by the bounding-box diagonal in one step, and that diagonal.
     double force_scale = 1.0;
     double length_scale = 1.0;
     double armijo_c = 1e-4;
@@ -28,7 +37,8 @@ struct NewtonOptions {
     /// First μ tried on failure, relative to the mean |diagonal| of the Hessian.
     double initial_regularization = 1e-8;
     int max_regularizations = 12;
-    bool project_psd = true;
+    enum class Projection { Adaptive, Always, Never };
+    Projection projection = Projection::Adaptive;
 };
 
 enum class NewtonTermination { Converged, SmallStep, MaxIterations, LineSearchFailed, FactorizationFailed, NonFinite };
@@ -41,6 +51,8 @@ struct NewtonSummary {
     double residual = 0.0;
     int line_search_halvings = 0;
     int regularizations = 0;
+    /// Iterations that needed the PSD-projected Hessian.
+    int projected_iterations = 0;
     double seconds = 0.0;
     NewtonTermination termination = NewtonTermination::MaxIterations;
     std::string message;
@@ -68,6 +80,10 @@ public:
     const HessianAssembler& assembler() const { return m_assembler; }
 
 private:
+    /// Factorise the assembled matrix (adding μI if `regularize` and needed) and solve
+    /// for a descent direction dx = −H⁻¹g; false if none was found.
+    bool solve_direction(const VectorXd& g, bool regularize, VectorXd& dx, NewtonSummary& summary);
+
     NewtonOptions m_options;
     HessianAssembler m_assembler;
     SparseCholesky m_cholesky;

@@ -7,10 +7,15 @@
 namespace lb {
 
 struct SparseCholesky::Impl {
-    Eigen::CholmodSupernodalLLT<SparseMatrixd, Eigen::Lower> llt;
+    Eigen::CholmodDecomposition<SparseMatrixd, Eigen::Lower> llt;
 };
 
-SparseCholesky::SparseCholesky() : m_impl(std::make_unique<Impl>()) { }
+SparseCholesky::SparseCholesky() : m_impl(std::make_unique<Impl>())
+{
+    // LLᵀ, supernodal or simplicial as CHOLMOD's flop-count heuristic decides
+    // (supernodal for every scene we ship; simplicial for very sparse factors).
+    m_impl->llt.setMode(Eigen::CholmodAuto);
+}
 SparseCholesky::~SparseCholesky() = default;
 
 void SparseCholesky::analyze(const SparseMatrixd& lower)

@@ -1,5 +1,6 @@
 #pragma once
-// Sparse Cholesky (CHOLMOD supernodal LLᵀ through Eigen's CholmodSupport)
+// Sparse Cholesky (CHOLMOD LLᵀ through Eigen's CholmodSupport; supernodal for
+// large factors, simplicial for small ones)
 // behind a small wrapper: analyse the pattern once, factorise each Newton
 // iteration, report a status instead of throwing.
 #include <memory>

@@ -1,0 +1,535 @@
+#include "nn/inference_network.hpp"
+
+#include <cassert>
+#include <sstream>
+#include <stdexcept>
+
+#if defined(__AVX__) && defined(__FMA__)
+#include <immintrin.h>
+#define LB_NN_AVX_FMA 1
+#endif
+
+#include "nn/batch_norm.hpp"
+#include "nn/linear.hpp"
+#include "nn/residual_block.hpp"
+
+namespace lb::nn {
+
+namespace {
+
+// ---- SIMD abstraction: 8 vectors per panel -------------------------------------------
+constexpr int vectors_per_panel = 8;
+
+template <typename S>
+struct Simd;
+
+#ifdef LB_NN_AVX_FMA
+template <>
+struct Simd<float> {
+    using V = __m256;
+    static constexpr int lanes = 8;
+    static V zero() { return _mm256_setzero_ps(); }
+    static V set1(float x) { return _mm256_set1_ps(x); }
+    static V load(const float* p) { return _mm256_load_ps(p); }
+    static V loadu(const float* p) { return _mm256_loadu_ps(p); }
+    static void storeu(float* p, V v) { _mm256_storeu_ps(p, v); }
+    static V fmadd(V a, V b, V c) { return _mm256_fmadd_ps(a, b, c); }
+    static V add(V a, V b) { return _mm256_add_ps(a, b); }
+};
+template <>
+struct Simd<double> {
+    using V = __m256d;
+    static constexpr int lanes = 4;
+    static V zero() { return _mm256_setzero_pd(); }
+    static V set1(double x) { return _mm256_set1_pd(x); }
+    static V load(const double* p) { return _mm256_load_pd(p); }
+    static V loadu(const double* p) { return _mm256_loadu_pd(p); }
+    static void storeu(double* p, V v) { _mm256_storeu_pd(p, v); }
+    static V fmadd(V a, V b, V c) { return _mm256_fmadd_pd(a, b, c); }
+    static V add(V a, V b) { return _mm256_add_pd(a, b); }
+};
+#else
+template <typename S>
+struct Simd {
+    using V = S;
+    static constexpr int lanes = 1;
+    static V zero() { return S(0); }
+    static V set1(S x) { return x; }
+    static V load(const S* p) { return *p; }
+    static V loadu(const S* p) { return *p; }
+    static void storeu(S* p, V v) { *p = v; }
+    static V fmadd(V a, V b, V c) { return a * b + c; }
+    static V add(V a, V b) { return a + b; }
+};
+#endif
+
+template <typename S>
+constexpr Index panel_rows()
+{
+    return Index(Simd<S>::lanes) * vectors_per_panel;
+}
+
+template <typename S>
+Index padded(Index n)
+{
+    const Index R = panel_rows<S>();
+    return (n + R - 1) / R * R;
+}
+
+/// y[0, P·R) (=|+=) packed · x (+ bias). `packed` holds P panels of in × R.
+template <typename S>
+void packed_gemv(const S* packed, const S* bias, const S* x, Index in, Index panels, S* y, bool accumulate)
+{
+    using Ops = Simd<S>;
+    using V = typename Ops::V;
+    constexpr int L = Ops::lanes;
+    constexpr Index R = panel_rows<S>();
+    for (Index p = 0; p < panels; ++p) {
+        const S* P = packed + p * in * R;
+        S* yp = y + p * R;
+        V acc[vectors_per_panel];
+        for (int v = 0; v < vectors_per_panel; ++v) {
+            V init = bias ? Ops::loadu(bias + p * R + v * L) : Ops::zero();
+            if (accumulate) init = Ops::add(init, Ops::loadu(yp + v * L));
+            acc[v] = init;
+        }
+        for (Index j = 0; j < in; ++j) {
+            const V xj = Ops::set1(x[j]);
+            const S* col = P + j * R;
+            for (int v = 0; v < vectors_per_panel; ++v) acc[v] = Ops::fmadd(Ops::load(col + v * L), xj, acc[v]);
+        }
+        for (int v = 0; v < vectors_per_panel; ++v) Ops::storeu(yp + v * L, acc[v]);
+    }
+}
+
+// ---- compilation in double precision ---------------------------------------------------
+struct DoubleOp {
+    using Kind = InferenceOpKind;
+    Kind kind = Kind::affine;
+    int src = -1, dst = -1;
+    bool accumulate = false;
+    ActivationKind act = ActivationKind::identity;
+    MatrixXd W;
+    VectorXd b, t;  // affine: bias; scale: s (in b) and t
+};
+
+class Compiler {
+public:
+    std::vector<DoubleOp> ops;
+    std::vector<Index> sizes;
+    std::vector<bool> read;
+
+    int new_buffer(Index size)
+    {
+        sizes.push_back(size);
+        read.push_back(false);
+        return static_cast<int>(sizes.size()) - 1;
+    }
+
+    void emit(DoubleOp op)
+    {
+        read[static_cast<std::size_t>(op.src)] = true;
+        ops.push_back(std::move(op));
+    }
+
+    int scale(int src, const VectorXd& s, const VectorXd& t)
+    {
+        DoubleOp op;
+        op.kind = DoubleOp::Kind::scale;
+        op.src = src;
+        op.dst = new_buffer(sizes[static_cast<std::size_t>(src)]);
+        op.b = s;
+        op.t = t;
+        const int dst = op.dst;
+        emit(std::move(op));
+        return dst;
+    }
+
+    /// Fold y ← s ⊙ y + t into the affine ops that produce buffer `buf`, if possible.
+    bool fold_scale_backward(int buf, const VectorXd& s, const VectorXd& t)
+    {
+        if (read[static_cast<std::size_t>(buf)]) return false;
+        std::vector<std::size_t> chain;
+        for (std::size_t i = ops.size(); i-- > 0;) {
+            const DoubleOp& op = ops[i];
+            if (op.dst != buf || op.kind != DoubleOp::Kind::affine || op.act != ActivationKind::identity) return false;
+            chain.push_back(i);
+            if (!op.accumulate) break;
+            if (i == 0) return false;
+        }
+        if (chain.empty() || ops[chain.back()].accumulate) return false;
+        for (std::size_t i : chain) {
+            DoubleOp& op = ops[i];
+            op.W = s.asDiagonal() * op.W;
+            op.b = s.cwiseProduct(op.b);
+            if (!op.accumulate) op.b += t;
+        }
+        return true;
+    }
+
+    int compile(const Layer& layer, int src)
+    {
+        const Index n = sizes[static_cast<std::size_t>(src)];
+        if (layer.in_features() != 0 && layer.in_features() != n)
+            throw std::invalid_argument("InferenceNetwork: " + layer.type_name() + " expects " +
+                                        std::to_string(layer.in_features()) + " inputs, got " + std::to_string(n));
+        if (const auto* seq = dynamic_cast<const Sequential*>(&layer)) {
+            int cur = src;
+            for (Index i = 0; i < seq->size(); ++i) cur = compile(seq->layer(i), cur);
+            return cur;
+        }
+        if (const auto* lin = dynamic_cast<const Linear*>(&layer)) {
+            DoubleOp op;
+            op.kind = DoubleOp::Kind::affine;
+            op.src = src;
+            op.dst = new_buffer(lin->out_features());
+            op.W = lin->weight();
+            op.b = lin->bias();
+            const int dst = op.dst;
+            emit(std::move(op));
+            return dst;
+        }
+        if (const auto* bn = dynamic_cast<const BatchNorm1d*>(&layer)) {
+            const VectorXd s = bn->eval_scale(), t = bn->eval_shift();
+            if (fold_scale_backward(src, s, t)) return src;
+            return scale(src, s, t);
+        }
+        if (const auto* act = dynamic_cast<const Activation*>(&layer)) {
+            if (act->kind() == ActivationKind::identity) return src;
+            if (!ops.empty() && !read[static_cast<std::size_t>(src)]) {
+                DoubleOp& last = ops.back();
+                if (last.dst == src && last.kind == DoubleOp::Kind::affine && last.act == ActivationKind::identity) {
+                    last.act = act->kind();
+                    return src;
+                }
+            }
+            DoubleOp op;
+            op.kind = DoubleOp::Kind::act;
+            op.src = src;
+            op.dst = new_buffer(n);
+            op.act = act->kind();
+            const int dst = op.dst;
+            emit(std::move(op));
+            return dst;
+        }
+        if (const auto* res = dynamic_cast<const ResidualBlock*>(&layer)) {
+            const int y = compile(res->f(), src);
+            if (y == src) throw std::invalid_argument("InferenceNetwork: residual block with an identity body");
+            DoubleOp op;
+            op.src = src;
+            op.dst = y;
+            if (res->has_projection()) {
+                op.kind = DoubleOp::Kind::affine;
+                op.accumulate = true;
+                op.W = res->projection().weight();
+                op.b = res->projection().bias();
+            } else {
+                op.kind = DoubleOp::Kind::add;
+            }
+            emit(std::move(op));
+            return y;
+        }
+        throw std::invalid_argument("InferenceNetwork: unsupported layer type " + layer.type_name());
+    }
+
+    /// Fold scale ops whose output only feeds affine ops into those ops' weights.
+    void fold_scales_forward(int output)
+    {
+        for (std::size_t i = 0; i < ops.size();) {
+            const DoubleOp& s_op = ops[i];
+            bool foldable = s_op.kind == DoubleOp::Kind::scale && s_op.dst != output;
+            std::vector<std::size_t> readers;
+            for (std::size_t k = 0; foldable && k < ops.size(); ++k) {
+                if (k == i) continue;
+                if (ops[k].dst == s_op.dst) foldable = false;
+                if (ops[k].src == s_op.dst) {
+                    if (ops[k].kind != DoubleOp::Kind::affine) foldable = false;
+                    readers.push_back(k);
+                }
+            }
+            // s_op.src must not change between the scale and its readers.
+            for (std::size_t r : readers)
+                for (std::size_t k = i + 1; foldable && k < r; ++k)
+                    if (ops[k].dst == s_op.src) foldable = false;
+            if (!foldable || readers.empty()) {
+                ++i;
+                continue;
+            }
+            for (std::size_t r : readers) {
+                DoubleOp& op = ops[r];
+                op.b += op.W * s_op.t;
+                op.W = op.W * s_op.b.asDiagonal();
+                op.src = s_op.src;
+            }
+            ops.erase(ops.begin() + static_cast<std::ptrdiff_t>(i));
+        }
+    }
+};
+
+template <typename S>
+Eigen::Matrix<S, Eigen::Dynamic, 1> padded_vector(const VectorXd& v)
+{
+    Eigen::Matrix<S, Eigen::Dynamic, 1> out = Eigen::Matrix<S, Eigen::Dynamic, 1>::Zero(padded<S>(v.size()));
+    out.head(v.size()) = v.cast<S>();
+    return out;
+}
+
+/// Row-wise scaling M.row(r) *= act'(pre[r]).
+template <typename M, typename Vec>
+void scale_rows_by_derivative(ActivationKind kind, const Vec& pre, M& m)
+{
+    if (kind == ActivationKind::identity) return;
+    for (Index r = 0; r < m.rows(); ++r) m.row(r) *= activation_derivative(kind, pre[r]);
+}
+
+} // namespace
+
+template <typename S>
+BasicInferenceNetwork<S>::BasicInferenceNetwork(const Sequential& net, const Standardizer* input_standardizer)
+{
+    if (net.empty()) throw std::invalid_argument("InferenceNetwork: empty network");
+    m_in = net.in_features();
+    if (m_in == 0 && input_standardizer) m_in = input_standardizer->features();
+    if (m_in == 0) throw std::invalid_argument("InferenceNetwork: cannot infer the input width");
+    if (input_standardizer && !input_standardizer->empty() && input_standardizer->features() != m_in)
+        throw std::invalid_argument("InferenceNetwork: standardizer width does not match the network input");
+
+    Compiler c;
+    int cur = c.new_buffer(m_in);
+    if (input_standardizer && !input_standardizer->empty()) {
+        const VectorXd s = input_standardizer->stddev().cwiseInverse();
+        const VectorXd t = -input_standardizer->mean().cwiseProduct(s);
+        cur = c.scale(cur, s, t);
+    }
+    cur = c.compile(net, cur);
+    if (cur == 0) {  // identity network: still produce a separate output buffer
+        cur = c.scale(cur, VectorXd::Ones(m_in), VectorXd::Zero(m_in));
+    }
+    c.fold_scales_forward(cur);
+    m_output = cur;
+    m_out = c.sizes[static_cast<std::size_t>(cur)];
+
+    constexpr Index R = panel_rows<S>();
+    for (auto& d : c.ops) {
+        Op op;
+        op.kind = d.kind;
+        op.src = d.src;
+        op.dst = d.dst;
+        op.accumulate = d.accumulate;
+        op.act = d.act;
+        if (d.kind == Op::Kind::affine) {
+            op.in = d.W.cols();
+            op.out = d.W.rows();
+            op.W = d.W.cast<S>();
+            op.b = padded_vector<S>(d.b);
+            const Index panels = padded<S>(op.out) / R;
+            op.packed.assign(static_cast<std::size_t>(panels * op.in * R), S(0));
+            for (Index p = 0; p < panels; ++p)
+                for (Index j = 0; j < op.in; ++j)
+                    for (Index i = 0; i < R && p * R + i < op.out; ++i)
+                        op.packed[static_cast<std::size_t>((p * op.in + j) * R + i)] = op.W(p * R + i, j);
+        } else {
+            op.out = c.sizes[static_cast<std::size_t>(d.dst)];
+            op.in = c.sizes[static_cast<std::size_t>(d.src)];
+            if (d.kind == Op::Kind::scale) {
+                op.b = d.b.cast<S>();
+                op.t = d.t.cast<S>();
+            }
+        }
+        m_ops.push_back(std::move(op));
+    }
+    m_buffer_size = c.sizes;
+    for (Index n : m_buffer_size) m_buffers.push_back(Vector::Zero(padded<S>(n)));
+    m_pre.resize(m_ops.size());
+    for (std::size_t i = 0; i < m_ops.size(); ++i)
+        if (m_ops[i].act != ActivationKind::identity) m_pre[i] = Vector::Zero(m_ops[i].out);
+    m_adjoint.resize(m_buffers.size());
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::affine(const Op& op)
+{
+    Vector& y = m_buffers[static_cast<std::size_t>(op.dst)];
+    packed_gemv<S>(op.packed.data(), op.b.data(), m_buffers[static_cast<std::size_t>(op.src)].data(), op.in,
+                   y.size() / panel_rows<S>(), y.data(), op.accumulate);
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::run(bool record_tape, std::size_t end)
+{
+    for (std::size_t i = 0; i < end; ++i) {
+        const Op& op = m_ops[i];
+        auto src = m_buffers[static_cast<std::size_t>(op.src)].head(op.in);
+        auto dst = m_buffers[static_cast<std::size_t>(op.dst)].head(op.out);
+        switch (op.kind) {
+        case Op::Kind::affine: affine(op); break;
+        case Op::Kind::scale: dst.array() = op.b.array() * src.array() + op.t.array(); break;
+        case Op::Kind::act: dst = src; break;
+        case Op::Kind::add: dst += src; break;
+        }
+        if (op.act != ActivationKind::identity) {
+            if (record_tape) m_pre[i] = dst;
+            auto a = dst.array();
+            apply_activation(op.act, a);
+        }
+    }
+}
+
+template <typename S>
+typename BasicInferenceNetwork<S>::ConstVectorMap BasicInferenceNetwork<S>::evaluate(const Eigen::Ref<const Vector>& x)
+{
+    assert(x.size() == m_in);
+    m_buffers[0].head(m_in) = x;
+    run(false, m_ops.size());
+    return ConstVectorMap(m_buffers[static_cast<std::size_t>(m_output)].data(), m_out);
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::evaluate(const S* x, S* y)
+{
+    m_buffers[0].head(m_in) = Eigen::Map<const Vector>(x, m_in);
+    run(false, m_ops.size());
+    Eigen::Map<Vector>(y, m_out) = m_buffers[static_cast<std::size_t>(m_output)].head(m_out);
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::gemv_only()
+{
+    for (const Op& op : m_ops) {
+        if (op.kind != Op::Kind::affine) continue;
+        Vector& y = m_buffers[static_cast<std::size_t>(op.dst)];
+        packed_gemv<S>(op.packed.data(), nullptr, m_buffers[static_cast<std::size_t>(op.src)].data(), op.in,
+                       y.size() / panel_rows<S>(), y.data(), false);
+    }
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, const std::vector<Index>& rows,
+                                             Eigen::Ref<Matrix> J, JacobianMode mode)
+{
+    const Index k = static_cast<Index>(rows.size());
+    if (J.rows() != k || J.cols() != m_in)
+        throw std::invalid_argument("InferenceNetwork::jacobian_rows: J must be rows.size() × in_features()");
+    for (Index r : rows)
+        if (r < 0 || r >= m_out) throw std::out_of_range("InferenceNetwork::jacobian_rows: row out of range");
+    if (mode == JacobianMode::automatic) mode = k <= m_in ? JacobianMode::reverse : JacobianMode::forward;
+
+    // If the output is produced by a single plain affine op (the PCA layer), skip its
+    // primal and use W(rows, :) directly.
+    const Op& last = m_ops.back();
+    bool special = last.kind == Op::Kind::affine && !last.accumulate && last.act == ActivationKind::identity &&
+                   last.dst == m_output;
+    for (std::size_t i = 0; special && i + 1 < m_ops.size(); ++i)
+        if (m_ops[i].dst == m_output) special = false;
+    const std::size_t end = special ? m_ops.size() - 1 : m_ops.size();
+
+    // Primal pass with the tape (ops before `end` only).
+    m_buffers[0].head(m_in) = x;
+    run(true, end);
+    if (special) {
+        m_rows_weight.resize(k, last.in);
+        for (Index i = 0; i < k; ++i) m_rows_weight.row(i) = last.W.row(rows[static_cast<std::size_t>(i)]);
+    }
+
+    if (mode == JacobianMode::reverse) {
+        for (std::size_t b = 0; b < m_adjoint.size(); ++b) {
+            m_adjoint[b].resize(m_buffer_size[b], k);
+            m_adjoint[b].setZero();
+        }
+        if (special) {
+            m_adjoint[static_cast<std::size_t>(last.src)] = m_rows_weight.transpose();
+        } else {
+            for (Index i = 0; i < k; ++i)
+                m_adjoint[static_cast<std::size_t>(m_output)](rows[static_cast<std::size_t>(i)], i) = S(1);
+        }
+        for (std::size_t i = end; i-- > 0;) {
+            const Op& op = m_ops[i];
+            Matrix& a_dst = m_adjoint[static_cast<std::size_t>(op.dst)];
+            Matrix& a_src = m_adjoint[static_cast<std::size_t>(op.src)];
+            scale_rows_by_derivative(op.act, m_pre[i], a_dst);
+            switch (op.kind) {
+            case Op::Kind::affine:
+                a_src.noalias() += op.W.transpose() * a_dst;
+                if (!op.accumulate) a_dst.setZero();
+                break;
+            case Op::Kind::scale:
+                a_src += op.b.asDiagonal() * a_dst;
+                a_dst.setZero();
+                break;
+            case Op::Kind::act:
+                a_src += a_dst;
+                a_dst.setZero();
+                break;
+            case Op::Kind::add: a_src += a_dst; break;
+            }
+        }
+        J = m_adjoint[0].transpose();
+        return;
+    }
+
+    // Forward mode: tangents of every buffer, in × in identity at the input.
+    for (std::size_t b = 0; b < m_adjoint.size(); ++b) m_adjoint[b].resize(m_buffer_size[b], m_in);
+    m_adjoint[0].setIdentity();
+    for (std::size_t i = 0; i < end; ++i) {
+        const Op& op = m_ops[i];
+        Matrix& t_dst = m_adjoint[static_cast<std::size_t>(op.dst)];
+        const Matrix& t_src = m_adjoint[static_cast<std::size_t>(op.src)];
+        switch (op.kind) {
+        case Op::Kind::affine:
+            if (op.accumulate)
+                t_dst.noalias() += op.W * t_src;
+            else
+                t_dst.noalias() = op.W * t_src;
+            break;
+        case Op::Kind::scale: t_dst = op.b.asDiagonal() * t_src; break;
+        case Op::Kind::act: t_dst = t_src; break;
+        case Op::Kind::add: t_dst += t_src; break;
+        }
+        scale_rows_by_derivative(op.act, m_pre[i], t_dst);
+    }
+    if (special) {
+        J.noalias() = m_rows_weight * m_adjoint[static_cast<std::size_t>(last.src)];
+    } else {
+        const Matrix& t_out = m_adjoint[static_cast<std::size_t>(m_output)];
+        for (Index i = 0; i < k; ++i) J.row(i) = t_out.row(rows[static_cast<std::size_t>(i)]);
+    }
+}
+
+template <typename S>
+long long BasicInferenceNetwork<S>::multiply_adds() const
+{
+    long long n = 0;
+    for (const Op& op : m_ops)
+        if (op.kind == Op::Kind::affine) n += static_cast<long long>(op.in) * op.out;
+    return n;
+}
+
+template <typename S>
+long long BasicInferenceNetwork<S>::weight_bytes() const
+{
+    long long n = 0;
+    for (const Op& op : m_ops) n += static_cast<long long>(op.packed.size() * sizeof(S));
+    return n;
+}
+
+template <typename S>
+std::string BasicInferenceNetwork<S>::describe() const
+{
+    std::ostringstream os;
+    for (const Op& op : m_ops) {
+        switch (op.kind) {
+        case Op::Kind::affine: os << (op.accumulate ? "affine+= " : "affine ") << op.in << "->" << op.out; break;
+        case Op::Kind::scale: os << "scale " << op.out; break;
+        case Op::Kind::act: os << "act " << op.out; break;
+        case Op::Kind::add: os << "add " << op.out; break;
+        }
+        if (op.act != ActivationKind::identity) os << " " << to_string(op.act);
+        os << " [" << op.src << " -> " << op.dst << "]\n";
+    }
+    return os.str();
+}
+
+template class BasicInferenceNetwork<float>;
+template class BasicInferenceNetwork<double>;
+
+} // namespace lb::nn

@@ -1,0 +1,115 @@
+#pragma once
+// Fast single-sample inference (batch 1, one thread), float by default.
+//
+// A trained Sequential (eval mode) is compiled into a short list of fused ops on
+// preallocated buffers:
+//   affine:  dst (=|+=) W src + b, then the activation, in one op
+//   scale:   dst = s ⊙ src + t          (only a BatchNorm that cannot be folded)
+//   act:     dst = act(src)             (only an activation that cannot be fused)
+//   add:     dst += src                 (identity skip of a residual block)
+// Folding rules (done in double precision before rounding to Scalar):
+//   * BatchNorm after Linear(s): s ⊙ (W x + b) + t = (diag(s) W) x + (s ⊙ b + t), applied
+//     to every Linear accumulating into that buffer (the residual projection too);
+//   * a scale whose output is read only by Linears (the input Standardizer, a leading
+//     BatchNorm) is folded forward: W (s ⊙ x + t) + b = (W diag(s)) x + (W t + b);
+//   * an activation is fused into the Linear that produced its input.
+// The armadillo decoder (12 → res 200 ×3 → 50 → 10,020) becomes 9 GEMVs + 2 adds.
+//
+// Weights are packed in row panels of R = 8 SIMD vectors (64 floats / 32 doubles):
+// panel p holds rows [pR, pR+R) as in consecutive R-vectors (column j of the panel
+// contiguous), so each GEMV streams its weights exactly once, sequentially, with R
+// independent FMA accumulators held in registers (AVX2+FMA; a portable loop
+// otherwise). Buffers are padded to whole panels. evaluate() performs no heap
+// allocation (tested by counting malloc calls).
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nn/activation.hpp"
+#include "nn/network_derivatives.hpp"
+#include "nn/sequential.hpp"
+#include "nn/standardizer.hpp"
+
+namespace lb::nn {
+
+enum class InferenceOpKind { affine, scale, act, add };
+
+template <typename Scalar>
+class BasicInferenceNetwork {
+public:
+    using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+    using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+    using ConstVectorMap = Eigen::Map<const Vector>;
+
+    BasicInferenceNetwork() = default;
+    /// Compile `net` as evaluated in eval mode (BatchNorm running statistics), with an
+    /// optional input standardizer applied first. Throws std::invalid_argument for an
+    /// empty network or unsupported layer types.
+    explicit BasicInferenceNetwork(const Sequential& net, const Standardizer* input_standardizer = nullptr);
+
+    Index in_features() const { return m_in; }
+    Index out_features() const { return m_out; }
+
+    /// y = net(x) for one sample. The returned view points into an internal buffer and
+    /// is valid until the next call. No heap allocation.
+    ConstVectorMap evaluate(const Eigen::Ref<const Vector>& x);
+    /// Same, copying into y (size out_features()).
+    void evaluate(const Scalar* x, Scalar* y);
+
+    /// Rows `rows` of the Jacobian at x into J (rows.size() × in_features()); mode
+    /// as for nn::jacobian_rows (automatic: reverse if rows.size() ≤ in). Workspaces
+    /// are sized on the first call and reused (no allocation while the row count stays
+    /// the same).
+    void jacobian_rows(const Eigen::Ref<const Vector>& x, const std::vector<Index>& rows, Eigen::Ref<Matrix> J,
+                       JacobianMode mode = JacobianMode::automatic);
+
+    /// Multiply-adds of one evaluate() (weights touched once each).
+    long long multiply_adds() const;
+    /// Bytes of packed weights streamed by one evaluate().
+    long long weight_bytes() const;
+    /// One line per op, e.g. "affine 12->200 swish [1 -> 2]".
+    std::string describe() const;
+
+    /// The packed GEMVs alone (no bias, no activation, no adds), into each op's
+    /// output buffer: the memory/compute lower bound benchmarked beside evaluate().
+    void gemv_only();
+
+    struct Op {
+        using Kind = InferenceOpKind;
+        Kind kind = Kind::affine;
+        int src = -1, dst = -1;
+        bool accumulate = false;  ///< affine: dst += ... instead of dst = ...
+        ActivationKind act = ActivationKind::identity;
+        Index in = 0, out = 0;
+        std::vector<Scalar, Eigen::aligned_allocator<Scalar>> packed;  ///< affine: panel-packed W
+        Matrix W;   ///< affine: out × in, plain (derivatives)
+        Vector b;   ///< affine: bias padded to whole panels;  scale: s
+        Vector t;   ///< scale: shift
+    };
+    const std::vector<Op>& ops() const { return m_ops; }
+
+private:
+    /// Ops [0, end); with the tape, pre-activations are kept for the derivatives.
+    void run(bool record_tape, std::size_t end);
+    void affine(const Op& op);
+
+    Index m_in = 0, m_out = 0;
+    std::vector<Op> m_ops;
+    std::vector<Vector> m_buffers;     ///< padded to whole panels
+    std::vector<Index> m_buffer_size;  ///< logical sizes
+    int m_output = -1;
+
+    // derivative workspaces
+    std::vector<Vector> m_pre;                 ///< per op: pre-activation (tape)
+    std::vector<Matrix> m_adjoint;             ///< per buffer: size × k (reverse) or size × in (forward)
+    Matrix m_work, m_rows_weight;
+};
+
+using InferenceNetwork = BasicInferenceNetwork<float>;
+using InferenceNetworkD = BasicInferenceNetwork<double>;
+
+extern template class BasicInferenceNetwork<float>;
+extern template class BasicInferenceNetwork<double>;
+
+} // namespace lb::nn

@@ -1,0 +1,58 @@
+#include "nn/linear.hpp"
+
+#include <cassert>
+
+#include "nn/init.hpp"
+
+namespace lb::nn {
+
+Linear::Linear(Index in_features, Index out_features)
+    : m_weight(MatrixXd::Zero(out_features, in_features)),
+      m_weight_grad(MatrixXd::Zero(out_features, in_features)),
+      m_bias(VectorXd::Zero(out_features)),
+      m_bias_grad(VectorXd::Zero(out_features))
+{
+}
+
+Linear::Linear(Index in_features, Index out_features, Rng& rng) : Linear(in_features, out_features)
+{
+    init_linear_default(m_weight, m_bias, rng);
+}
+
+MatrixXd Linear::forward(const MatrixXd& X, bool /*training*/)
+{
+    assert(X.rows() == in_features());
+    m_input = X;
+    MatrixXd Y(out_features(), X.cols());
+    Y.noalias() = m_weight * X;
+    Y.colwise() += m_bias;
+    return Y;
+}
+
+MatrixXd Linear::backward(const MatrixXd& dY, bool accumulate_parameter_gradients)
+{
+    assert(dY.rows() == out_features());
+    if (accumulate_parameter_gradients) {
+        assert(dY.cols() == m_input.cols());
+        m_weight_grad.noalias() += dY * m_input.transpose();
+        m_bias_grad += dY.rowwise().sum();
+    }
+    MatrixXd dX(in_features(), dY.cols());
+    dX.noalias() = m_weight.transpose() * dY;
+    return dX;
+}
+
+void Linear::collect_parameters(const std::string& prefix, std::vector<ParameterRef>& out)
+{
+    out.push_back({prefix + "weight", Eigen::Map<MatrixXd>(m_weight.data(), m_weight.rows(), m_weight.cols()),
+                   Eigen::Map<MatrixXd>(m_weight_grad.data(), m_weight_grad.rows(), m_weight_grad.cols())});
+    out.push_back({prefix + "bias", Eigen::Map<MatrixXd>(m_bias.data(), m_bias.size(), 1),
+                   Eigen::Map<MatrixXd>(m_bias_grad.data(), m_bias_grad.size(), 1), true});
+}
+
+void Linear::describe(std::ostream& os) const
+{
+    os << "{\"type\": \"Linear\", \"in\": " << in_features() << ", \"out\": " << out_features() << "}";
+}
+
+} // namespace lb::nn

@@ -1,0 +1,41 @@
+#pragma once
+// Fully connected layer  Y = W X + b 1ᵀ  (torch.nn.Linear).
+#include "core/rng.hpp"
+#include "nn/layer.hpp"
+
+namespace lb::nn {
+
+class Linear final : public Layer {
+public:
+    /// PyTorch-default initialisation (see init.hpp) drawn from `rng`.
+    Linear(Index in_features, Index out_features, Rng& rng);
+    /// Zero-initialised (weights to be loaded or set).
+    Linear(Index in_features, Index out_features);
+
+    std::string type_name() const override { return "Linear"; }
+    Index in_features() const override { return m_weight.cols(); }
+    Index out_features() const override { return m_weight.rows(); }
+
+    MatrixXd forward(const MatrixXd& X, bool training) override;
+    /// dX = Wᵀ dY;  dW += dY Xᵀ;  db += dY 1.
+    MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) override;
+    MatrixXd tangent(const MatrixXd& dX) const override { return m_weight * dX; }
+
+    void collect_parameters(const std::string& prefix, std::vector<ParameterRef>& out) override;
+    void describe(std::ostream& os) const override;
+    std::unique_ptr<Layer> clone() const override { return std::make_unique<Linear>(*this); }
+
+    /// out × in
+    MatrixXd& weight() { return m_weight; }
+    const MatrixXd& weight() const { return m_weight; }
+    /// out
+    VectorXd& bias() { return m_bias; }
+    const VectorXd& bias() const { return m_bias; }
+
+private:
+    MatrixXd m_weight, m_weight_grad;
+    VectorXd m_bias, m_bias_grad;
+    MatrixXd m_input;  ///< cached X
+};
+
+} // namespace lb::nn

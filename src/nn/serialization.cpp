@@ -1,0 +1,113 @@
+#include "nn/serialization.hpp"
+
+#include "core/error.hpp"
+#include "nn/architecture.hpp"
+
+namespace lb::nn {
+
+namespace {
+
+std::string describe_shape(const std::vector<hsize_t>& dims)
+{
+    std::string s = "(";
+    for (std::size_t i = 0; i < dims.size(); ++i) s += (i ? ", " : "") + std::to_string(dims[i]);
+    return s + (dims.size() == 1 ? ",)" : ")");
+}
+
+void check_shape(const h5::File& file, const std::string& name, const std::vector<hsize_t>& expected)
+{
+    const auto dims = file.shape(name);
+    if (dims != expected)
+        throw IoError("HDF5 file '" + file.path() + "', '" + name + "': shape " + describe_shape(dims) +
+                      " does not match the architecture's " + describe_shape(expected));
+}
+
+} // namespace
+
+void save_network(h5::File& file, const std::string& prefix, Sequential& net, const Standardizer* standardizer)
+{
+    const bool with_standardizer = standardizer != nullptr && !standardizer->empty();
+    if (with_standardizer && standardizer->features() != net.in_features())
+        throw std::invalid_argument("save_network: standardizer width " + std::to_string(standardizer->features()) +
+                                    " does not match the network input " + std::to_string(net.in_features()));
+    for (const auto& p : net.parameters(prefix)) {
+        if (p.vector)
+            file.write(p.name, VectorXd(p.value.col(0)));
+        else
+            file.write(p.name, MatrixXd(p.value));
+    }
+    for (const auto& b : net.buffers(prefix)) {
+        if (b.integer) {
+            const double count = b.value(0, 0);
+            file.write_array(b.name, {}, &count);  // a scalar, like torch's num_batches_tracked
+        } else {
+            file.write(b.name, VectorXd(b.value.col(0)));
+        }
+    }
+    if (with_standardizer) {
+        file.write(prefix + "standardizer.mean", standardizer->mean());
+        file.write(prefix + "standardizer.std", standardizer->stddev());
+    }
+    file.set_attribute("/", prefix + "architecture", describe_architecture(net, with_standardizer));
+}
+
+LoadedNetwork load_network(const h5::File& file, const std::string& prefix)
+{
+    const std::string key = prefix + "architecture";
+    if (!file.has_attribute("/", key))
+        throw IoError("HDF5 file '" + file.path() + "': no attribute '" + key + "' (no network saved under prefix '" +
+                      prefix + "')");
+    Architecture arch = parse_architecture(file.attribute_string("/", key));
+    LoadedNetwork out;
+    out.network = std::move(arch.network);
+    for (auto& p : out.network.parameters(prefix)) {
+        if (p.vector) {
+            check_shape(file, p.name, {hsize_t(p.value.rows())});
+            p.value.col(0) = file.read_vector(p.name);
+        } else {
+            check_shape(file, p.name, {hsize_t(p.value.rows()), hsize_t(p.value.cols())});
+            p.value = file.read_matrix(p.name);
+        }
+    }
+    for (auto& b : out.network.buffers(prefix)) {
+        if (b.integer) {
+            std::vector<hsize_t> dims;
+            const std::vector<double> v = file.read_array(b.name, dims);
+            if (v.size() != 1) throw IoError("HDF5 file '" + file.path() + "', '" + b.name + "': expected a scalar");
+            b.value(0, 0) = v[0];
+        } else {
+            check_shape(file, b.name, {hsize_t(b.value.rows())});
+            b.value.col(0) = file.read_vector(b.name);
+        }
+    }
+    if (arch.has_standardizer) {
+        const std::string m = prefix + "standardizer.mean", s = prefix + "standardizer.std";
+        const Index n = out.network.in_features();
+        check_shape(file, m, {hsize_t(n)});
+        check_shape(file, s, {hsize_t(n)});
+        try {
+            out.standardizer.emplace(file.read_vector(m), file.read_vector(s));
+        } catch (const std::invalid_argument& e) {
+            throw IoError("HDF5 file '" + file.path() + "', '" + s + "': " + e.what());
+        }
+    }
+    return out;
+}
+
+void save_network(const std::string& path, const std::string& prefix, Sequential& net, const Standardizer* standardizer)
+{
+    h5::AtomicOutput output(path);
+    {
+        h5::File file = h5::File::create(output.temp_path());
+        save_network(file, prefix, net, standardizer);
+    }
+    output.commit();
+}
+
+LoadedNetwork load_network(const std::string& path, const std::string& prefix)
+{
+    const h5::File file = h5::File::open(path);
+    return load_network(file, prefix);
+}
+
+} // namespace lb::nn
