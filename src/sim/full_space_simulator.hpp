@@ -19,6 +19,7 @@ public:
 
     const PhysicsModel& model() const { return m_model; }
     const IncrementalPotential& potential() const { return m_potential; }
+    const NewtonSolver& newton() const { return m_newton; }
 
 private:
     const PhysicsModel& m_model;

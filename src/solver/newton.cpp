@@ -95,7 +95,10 @@ NewtonSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
         // regularised with μI until it factorises and gives a descent direction.
         VectorXd dx;
         bool have_direction = false;
-        const bool try_exact = opt.projection != NewtonOptions::Projection::Always;
+        // Once the exact Hessian has failed in this solve, later iterations go
+        // straight to the projected one (one factorisation per iteration, not two).
+        const bool try_exact = opt.projection != NewtonOptions::Projection::Always &&
+                               summary.projected_iterations == 0;
         const bool allow_projected = opt.projection != NewtonOptions::Projection::Never;
         if (try_exact) {
             m_assembler.assemble(energies, x, false);
