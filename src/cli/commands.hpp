@@ -7,5 +7,9 @@ namespace lb::cli {
 
 void register_simulate(CLI::App& app);
 void register_info(CLI::App& app);
+void register_train_integrator(CLI::App& app);
+void register_rollout(CLI::App& app);
+void register_evaluate(CLI::App& app);
+void register_train_ae(CLI::App& app);
 
 } // namespace lb::cli

@@ -24,6 +24,10 @@ int main(int argc, char** argv)
     });
     lb::cli::register_simulate(app);
     lb::cli::register_info(app);
+    lb::cli::register_train_integrator(app);
+    lb::cli::register_rollout(app);
+    lb::cli::register_evaluate(app);
+    lb::cli::register_train_ae(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

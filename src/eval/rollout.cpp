@@ -1,0 +1,94 @@
+#include "eval/rollout.hpp"
+
+#include "core/log.hpp"
+#include "io/hdf5.hpp"
+
+namespace lb {
+
+BoundaryState boundary_state(const SequenceData& sequence, Index t)
+{
+    return {sequence.bc_params.row(t).transpose(), sequence.bc_positions.row(t).transpose()};
+}
+
+RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const SequenceData& sequence,
+                      const RolloutOptions& options)
+{
+    const Index T = options.max_frames > 0 ? std::min<Index>(options.max_frames, sequence.num_frames())
+                                           : sequence.num_frames();
+    RolloutResult r;
+    r.method = integrator.name();
+    r.sequence = sequence.name;
+    r.metrics = MatrixXd::Constant(T, kNumMetricColumns, std::numeric_limits<double>::quiet_NaN());
+    if (options.keep_positions) r.positions = MatrixXd::Constant(T, model.num_dofs(), std::numeric_limits<double>::quiet_NaN());
+    MetricContext context(model);
+
+    VectorXd x_prev2 = sequence.positions.row(0).transpose();
+    VectorXd x_prev = sequence.positions.row(1).transpose();
+    integrator.reset(x_prev2, boundary_state(sequence, 0), x_prev, boundary_state(sequence, 1));
+    for (Index t = 0; t < 2; ++t) {
+        r.metrics.row(t).setZero();
+        r.metrics(t, kKineticGt) = t > 0 ? model.kinetic_energy(sequence.positions.row(1).transpose(), x_prev2) : 0.0;
+        if (options.keep_positions) r.positions.row(t) = sequence.positions.row(t);
+    }
+    Progress progress("rollout " + r.method + " on " + sequence.name, T - 2, options.progress ? 2.0 : 1e30);
+    for (Index t = 2; t < T; ++t) {
+        const BoundaryState bc = boundary_state(sequence, t);
+        const StepTiming timing = integrator.step(bc);
+        const VectorXd& x = integrator.positions();
+        context.frame_metrics(x, x_prev, x_prev2, sequence.positions.row(t).transpose(),
+                              sequence.positions.row(t - 1).transpose(), bc.targets, r.metrics.row(t));
+        r.metrics(t, kIntegrateSeconds) = timing.integrate_seconds;
+        r.metrics(t, kDecodeSeconds) = timing.decode_seconds;
+        if (options.keep_positions) r.positions.row(t) = x.transpose();
+        if (!x.allFinite()) {
+            log_warn("rollout of %s on %s: non-finite state at frame %ld; stopping", r.method.c_str(),
+                     sequence.name.c_str(), long(t));
+            break;
+        }
+        x_prev2.swap(x_prev);
+        x_prev = x;
+        if (options.progress) progress.update(t - 1);
+    }
+    r.summary = summarize(r.metrics, model.length_scale());
+    return r;
+}
+
+void save_rollouts(const std::vector<RolloutResult>& results, const std::string& path, const std::string& config_text)
+{
+    h5::AtomicOutput out(path);
+    {
+        h5::File f = h5::File::create(out.temp_path());
+        f.set_attribute("/", "config", config_text);
+        f.set_attribute("/", "num_rollouts", (long long)results.size());
+        std::string columns;
+        for (const auto& c : metric_column_names()) columns += (columns.empty() ? "" : ",") + c;
+        f.set_attribute("/", "metric_columns", columns);
+        for (size_t k = 0; k < results.size(); ++k) {
+            const RolloutResult& r = results[k];
+            const std::string g = "rollouts/" + std::to_string(k);
+            f.write(g + "/metrics", r.metrics);
+            if (r.positions.size() > 0) {
+                const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> p = r.positions;
+                f.write_array(g + "/positions", {hsize_t(p.rows()), hsize_t(p.cols() / 3), 3}, p.data());
+            }
+            f.set_attribute(g, "method", r.method);
+            f.set_attribute(g, "sequence", r.sequence);
+            const RolloutSummary& s = r.summary;
+            f.set_attribute(g, "frames", (long long)s.frames);
+            f.set_attribute(g, "stable_horizon", (long long)s.stable_horizon);
+            f.set_attribute(g, "final_rmse", s.final_rmse);
+            f.set_attribute(g, "mean_rmse", s.mean_rmse);
+            f.set_attribute(g, "max_bc_violation", s.max_bc_violation);
+            f.set_attribute(g, "ke_ratio", s.ke_ratio);
+            f.set_attribute(g, "mean_residual", s.mean_residual);
+            f.set_attribute(g, "m_rms", s.m_rms);
+            f.set_attribute(g, "sted", s.sted);
+            f.set_attribute(g, "integrate_ms", s.integrate_ms);
+            f.set_attribute(g, "decode_ms", s.decode_ms);
+            f.set_attribute(g, "total_ms", s.total_ms);
+        }
+    }
+    out.commit();
+}
+
+} // namespace lb

@@ -1,0 +1,140 @@
+#include "integrators/latent_mlp_integrator.hpp"
+
+#include "core/error.hpp"
+#include "core/timer.hpp"
+#include "io/hdf5.hpp"
+#include "nn/serialization.hpp"
+
+namespace lb {
+
+VectorXd integrator_input(const VectorXd& z_prev, const VectorXd& z_prev2, const VectorXd& p,
+                          const VectorXd& p_prev, const VectorXd& p_prev2)
+{
+    VectorXd in(z_prev.size() * 2 + p.size() * 3);
+    in << z_prev, z_prev2, p, p_prev, p_prev2;
+    return in;
+}
+
+LatentMlpModel LatentMlpModel::create(Index latent_dim, Index param_dim, const std::vector<Index>& hidden,
+                                      std::uint64_t seed)
+{
+    LatentMlpModel m;
+    m.latent_dim = latent_dim;
+    m.param_dim = param_dim;
+    nn::MlpSpec spec;
+    spec.in_dim = m.input_dim();
+    spec.hidden = hidden;
+    spec.out_dim = latent_dim;
+    spec.activation = nn::ActivationKind::swish;
+    Rng rng(seed);
+    m.network = nn::make_mlp(spec, rng);
+    m.inputs = nn::Standardizer(m.input_dim());
+    m.output_scale = VectorXd::Ones(latent_dim);
+    return m;
+}
+
+MatrixXd LatentMlpModel::forward(const MatrixXd& inputs_raw, const MatrixXd& z_prev, bool training)
+{
+    const MatrixXd out = network.forward(inputs.apply(inputs_raw), training);
+    return z_prev + output_scale.asDiagonal() * out;
+}
+
+void LatentMlpModel::backward(const MatrixXd& dZ)
+{
+    // z = z_prev + s ⊙ out: ∂L/∂out = s ⊙ ∂L/∂z (z_prev is an input, not a parameter).
+    network.backward(output_scale.asDiagonal() * dZ, true);
+}
+
+void LatentMlpModel::save(h5::File& file, const std::string& prefix)
+{
+    nn::save_network(file, prefix, network, &inputs);
+    file.write(prefix + "output_scale", output_scale);
+    file.set_attribute("/", prefix + "latent_dim", (long long)latent_dim);
+    file.set_attribute("/", prefix + "param_dim", (long long)param_dim);
+    file.set_attribute("/", prefix + "loss", loss);
+    file.set_attribute("/", prefix + "description", description);
+}
+
+LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& prefix)
+{
+    LatentMlpModel m;
+    nn::LoadedNetwork loaded = nn::load_network(file, prefix);
+    m.network = std::move(loaded.network);
+    if (!loaded.standardizer) throw IoError("'" + file.path() + "': integrator has no input standardiser");
+    m.inputs = *loaded.standardizer;
+    m.output_scale = file.read_vector(prefix + "output_scale");
+    m.latent_dim = Index(file.attribute_int("/", prefix + "latent_dim"));
+    m.param_dim = Index(file.attribute_int("/", prefix + "param_dim"));
+    m.loss = file.attribute_string("/", prefix + "loss");
+    m.description = file.attribute_string("/", prefix + "description");
+    if (m.network.in_features() != m.input_dim() || m.network.out_features() != m.latent_dim ||
+        m.output_scale.size() != m.latent_dim) {
+        throw IoError("'" + file.path() + "': integrator network shapes disagree with its latent/parameter sizes");
+    }
+    return m;
+}
+
+LatentMlpIntegrator::LatentMlpIntegrator(std::string name, std::shared_ptr<Autoencoder> autoencoder,
+                                         LatentMlpModel model)
+    : m_name(std::move(name)), m_autoencoder(std::move(autoencoder)), m_model(std::move(model)),
+      m_integrator_net(m_model.network, &m_model.inputs), m_decoder_net(m_autoencoder->decoder())
+{
+    if (m_model.latent_dim != m_autoencoder->latent_dim()) {
+        throw Error("integrator latent size " + std::to_string(m_model.latent_dim) + " differs from the autoencoder's " +
+                    std::to_string(m_autoencoder->latent_dim()));
+    }
+    m_input.resize(m_model.input_dim());
+    m_scale = m_model.output_scale.cast<float>();
+}
+
+void LatentMlpIntegrator::reset(const VectorXd& x_prev2, const BoundaryState& bc_prev2, const VectorXd& x_prev,
+                                const BoundaryState& bc_prev)
+{
+    MatrixXd X(x_prev.size(), 2);
+    X.col(0) = x_prev2;
+    X.col(1) = x_prev;
+    const MatrixXd Z = m_autoencoder->encode(X);
+    m_z2 = Z.col(0);
+    m_z1 = Z.col(1);
+    m_z = m_z1;
+    m_p2 = bc_prev2.params;
+    m_p1 = bc_prev.params;
+    m_x = x_prev;
+}
+
+void LatentMlpIntegrator::integrate_only(const BoundaryState& bc)
+{
+    const Index L = m_model.latent_dim, P = m_model.param_dim;
+    m_input.segment(0, L) = m_z1.cast<float>();
+    m_input.segment(L, L) = m_z2.cast<float>();
+    m_input.segment(2 * L, P) = bc.params.cast<float>();
+    m_input.segment(2 * L + P, P) = m_p1.cast<float>();
+    m_input.segment(2 * L + 2 * P, P) = m_p2.cast<float>();
+    const auto out = m_integrator_net.evaluate(m_input);
+    m_z = m_z1 + (m_scale.cwiseProduct(out)).cast<double>();
+}
+
+void LatentMlpIntegrator::decode_only(const BoundaryState& bc)
+{
+    const Eigen::VectorXf zf = m_z.cast<float>();
+    const auto features = m_decoder_net.evaluate(zf);
+    m_x = m_autoencoder->encoding().to_positions(features.cast<double>(), bc.targets);
+}
+
+StepTiming LatentMlpIntegrator::step(const BoundaryState& bc)
+{
+    StepTiming timing;
+    Timer timer;
+    integrate_only(bc);
+    timing.integrate_seconds = timer.seconds();
+    timer.reset();
+    decode_only(bc);
+    timing.decode_seconds = timer.seconds();
+    m_z2.swap(m_z1);
+    m_z1 = m_z;
+    m_p2.swap(m_p1);
+    m_p1 = bc.params;
+    return timing;
+}
+
+} // namespace lb

@@ -1,0 +1,79 @@
+#pragma once
+// The latent integrator of Li et al. 2025 §3.3:
+//   z_t = I(z_{t−1}, z_{t−2}, p_t, p_{t−1}, p_{t−2}),
+// an MLP with Swish on standardised inputs (training statistics). We
+// parametrise its output as an increment,
+//   z_t = z_{t−1} + s ⊙ MLP(standardise([z_{t−1}, z_{t−2}, p_t, p_{t−1}, p_{t−2}])),
+// with s the per-component standard deviation of z_t − z_{t−1} in the training
+// data: a fixed skip connection and output scale, so the same function class
+// as the paper's, with a well-scaled output at initialisation.
+//
+// Inference runs the integrator and the decoder through the float
+// InferenceNetwork (BatchNorm folded, no allocation per step).
+#include <memory>
+
+#include "integrators/integrator.hpp"
+#include "io/hdf5.hpp"
+#include "latent/autoencoder.hpp"
+#include "nn/inference_network.hpp"
+#include "nn/mlp_spec.hpp"
+#include "nn/standardizer.hpp"
+
+namespace lb {
+
+/// The trainable part: network, input standardiser and output scale.
+struct LatentMlpModel {
+    Index latent_dim = 0;
+    Index param_dim = 0;
+    nn::Sequential network;    ///< in 2·latent + 3·param_dim → hidden → latent
+    nn::Standardizer inputs;   ///< on the 2·latent + 3·param_dim inputs
+    VectorXd output_scale;     ///< s (latent)
+    std::string loss;          ///< how it was trained: "self_supervised" or "supervised_l2"
+    std::string description;   ///< e.g. "noise on, balancing on"
+
+    Index input_dim() const { return 2 * latent_dim + 3 * param_dim; }
+    /// Batched forward in double (training), columns are samples.
+    /// @param inputs_raw  input_dim × B unstandardised; @param z_prev  latent × B
+    MatrixXd forward(const MatrixXd& inputs_raw, const MatrixXd& z_prev, bool training);
+    /// Backward of the last forward: dZ (latent × B) → accumulates parameter gradients.
+    void backward(const MatrixXd& dZ);
+
+    static LatentMlpModel create(Index latent_dim, Index param_dim, const std::vector<Index>& hidden,
+                                 std::uint64_t seed);
+    void save(h5::File& file, const std::string& prefix);
+    static LatentMlpModel load(const h5::File& file, const std::string& prefix);
+};
+
+/// Assemble the integrator input [z1, z2, p_t, p1, p2] for one sample.
+VectorXd integrator_input(const VectorXd& z_prev, const VectorXd& z_prev2, const VectorXd& p,
+                          const VectorXd& p_prev, const VectorXd& p_prev2);
+
+class LatentMlpIntegrator final : public Integrator {
+public:
+    /// @param name  label in tables (e.g. "ours", "supervised_l2")
+    LatentMlpIntegrator(std::string name, std::shared_ptr<Autoencoder> autoencoder, LatentMlpModel model);
+
+    std::string name() const override { return m_name; }
+    void reset(const VectorXd& x_prev2, const BoundaryState& bc_prev2, const VectorXd& x_prev,
+               const BoundaryState& bc_prev) override;
+    StepTiming step(const BoundaryState& bc) override;
+    const VectorXd& positions() const override { return m_x; }
+    const VectorXd& latent() const override { return m_z; }
+
+    /// Latent step alone in float (for benchmarks): z_t from the current state.
+    void integrate_only(const BoundaryState& bc);
+    /// Decode the current latent alone (for benchmarks).
+    void decode_only(const BoundaryState& bc);
+
+private:
+    std::string m_name;
+    std::shared_ptr<Autoencoder> m_autoencoder;
+    LatentMlpModel m_model;
+    nn::InferenceNetwork m_integrator_net;  ///< standardiser folded in
+    nn::InferenceNetwork m_decoder_net;
+    Eigen::VectorXf m_input, m_scale, m_z1f, m_zf;
+    VectorXd m_z, m_z1, m_z2, m_p1, m_p2, m_x;
+    Eigen::VectorXf m_features;
+};
+
+} // namespace lb

@@ -1,0 +1,302 @@
+#include "integrators/trainer.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <numeric>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "core/timer.hpp"
+#include "io/hdf5.hpp"
+#include "nn/adam.hpp"
+
+namespace lb {
+
+std::string to_string(IntegratorLoss loss)
+{
+    return loss == IntegratorLoss::SelfSupervised ? "self_supervised" : "supervised_l2";
+}
+
+IntegratorLoss integrator_loss_from_string(const std::string& name)
+{
+    if (name == "self_supervised") return IntegratorLoss::SelfSupervised;
+    if (name == "supervised_l2") return IntegratorLoss::SupervisedL2;
+    throw ConfigError("unknown integrator loss '" + name + "' (expected self_supervised or supervised_l2)");
+}
+
+std::string IntegratorTrainOptions::describe() const
+{
+    std::ostringstream s;
+    s << to_string(loss) << ", hidden [";
+    for (size_t i = 0; i < hidden.size(); ++i) s << (i ? "," : "") << hidden[i];
+    s << "], noise " << (training_noise ? "on" : "off") << ", balancing " << (data_balancing ? "on" : "off")
+      << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
+    return s.str();
+}
+
+std::vector<Index> default_integrator_hidden(const std::string& scene_name)
+{
+    if (scene_name == "cloth") return {32, 32};
+    if (scene_name == "rods_rotate") return {512, 512, 512};
+    if (scene_name == "rods_translate") return {256, 256, 256};
+    return {256, 256, 256, 256, 256};
+}
+
+TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
+{
+    std::vector<Index> counts;
+    Index total = 0;
+    for (const auto& s : data.sequences) total += std::max<Index>(s.train_frames - 2, 0);
+    if (total == 0) throw Error("dataset has no training samples (every sequence needs train_frames ≥ 3)");
+    const Index L = ae.latent_dim();
+    const Index P = data.sequences.front().bc_params.cols();
+    const Index B3 = data.sequences.front().bc_positions.cols();
+    TrainingSamples out;
+    out.z_prev.resize(L, total);
+    out.z_prev2.resize(L, total);
+    out.z_target.resize(L, total);
+    out.p.resize(P, total);
+    out.p_prev.resize(P, total);
+    out.p_prev2.resize(P, total);
+    out.targets.resize(B3, total);
+    out.targets_prev.resize(B3, total);
+    out.targets_prev2.resize(B3, total);
+    Index k = 0;
+    for (const auto& s : data.sequences) {
+        if (s.train_frames < 3) continue;
+        const MatrixXd Z = ae.encode(s.positions.topRows(s.train_frames).transpose());
+        for (Index t = 2; t < s.train_frames; ++t, ++k) {
+            out.z_prev.col(k) = Z.col(t - 1);
+            out.z_prev2.col(k) = Z.col(t - 2);
+            out.z_target.col(k) = Z.col(t);
+            out.p.col(k) = s.bc_params.row(t).transpose();
+            out.p_prev.col(k) = s.bc_params.row(t - 1).transpose();
+            out.p_prev2.col(k) = s.bc_params.row(t - 2).transpose();
+            out.targets.col(k) = s.bc_positions.row(t).transpose();
+            out.targets_prev.col(k) = s.bc_positions.row(t - 1).transpose();
+            out.targets_prev2.col(k) = s.bc_positions.row(t - 2).transpose();
+        }
+    }
+    return out;
+}
+
+IntegratorTrainer::IntegratorTrainer(const PhysicsModel& model, Autoencoder& autoencoder,
+                                     IntegratorTrainOptions options)
+    : m_model(model), m_autoencoder(autoencoder), m_options(std::move(options))
+{
+    const double w_bc = model.kind() == MeshKind::Rods ? 0.0 : m_options.penalty_weight;
+    const int threads = std::max(1, omp_get_max_threads());
+    m_potentials.reserve(size_t(threads));
+    for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, w_bc);
+}
+
+IntegratorBatch IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::vector<Index>& indices,
+                                              Rng& rng) const
+{
+    const Index n = Index(indices.size());
+    const Index copies = m_options.training_noise ? 2 : 1;
+    const Index L = samples.z_prev.rows();
+    IntegratorBatch b;
+    auto gather = [&](const MatrixXd& src, MatrixXd& dst) {
+        dst.resize(src.rows(), n * copies);
+        for (Index c = 0; c < copies; ++c) {
+            for (Index i = 0; i < n; ++i) dst.col(c * n + i) = src.col(indices[size_t(i)]);
+        }
+    };
+    gather(samples.z_prev, b.z_prev);
+    gather(samples.z_prev2, b.z_prev2);
+    gather(samples.z_target, b.z_target);
+    gather(samples.targets, b.targets);
+    gather(samples.targets_prev, b.targets_prev);
+    gather(samples.targets_prev2, b.targets_prev2);
+    MatrixXd p, p1, p2;
+    gather(samples.p, p);
+    gather(samples.p_prev, p1);
+    gather(samples.p_prev2, p2);
+    if (copies == 2) {
+        // Uniform noise of noise_fraction × the batch's per-component std on the
+        // second copy's input latents; boundary parameters unchanged.
+        for (MatrixXd* z : {&b.z_prev, &b.z_prev2}) {
+            const MatrixXd clean = z->leftCols(n);
+            const VectorXd mean = clean.rowwise().mean();
+            const VectorXd std = ((clean.colwise() - mean).array().square().rowwise().sum() / double(n)).sqrt();
+            for (Index i = 0; i < n; ++i) {
+                for (Index c = 0; c < L; ++c) {
+                    (*z)(c, n + i) += m_options.noise_fraction * std[c] * rng.uniform(-1.0, 1.0);
+                }
+            }
+        }
+    }
+    b.inputs.resize(2 * L + 3 * p.rows(), n * copies);
+    b.inputs << b.z_prev, b.z_prev2, p, p1, p2;
+    return b;
+}
+
+double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient)
+{
+    const Index B = batch.size();
+    const MatrixXd Zt = model.forward(batch.inputs, batch.z_prev, with_gradient);
+    if (m_options.loss == IntegratorLoss::SupervisedL2) {
+        const MatrixXd diff = Zt - batch.z_target;
+        if (with_gradient) model.backward(2.0 * diff / double(B));
+        return diff.squaredNorm() / double(B);
+    }
+
+    // Self-supervised: the incremental potential of the decoded prediction.
+    const MatrixXd X1 = m_autoencoder.decode(batch.z_prev, batch.targets_prev);
+    const MatrixXd X2 = m_autoencoder.decode(batch.z_prev2, batch.targets_prev2);
+    const MatrixXd Xt = m_autoencoder.decode(Zt, batch.targets);
+    const Index n_dofs = Xt.rows();
+    const double dt = m_model.dt();
+    VectorXd energy(B), weight(B);
+    MatrixXd grad(with_gradient ? n_dofs : 0, with_gradient ? B : 0);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (Index i = 0; i < B; ++i) {
+        IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
+        const VectorXd x1 = X1.col(i), x2 = X2.col(i), xt = Xt.col(i);
+        pot.set_previous(x1, x2);
+        pot.set_bc_targets(Eigen::Map<const MatrixX3d>(batch.targets.col(i).data(), batch.targets.rows() / 3, 3));
+        energy[i] = pot.value(xt);
+        if (with_gradient) grad.col(i) = pot.gradient(xt);
+        double w = 1.0;
+        if (m_options.data_balancing) {
+            const Vector3d v = (as_rows(x1) - as_rows(x2)).colwise().mean().transpose() / dt;
+            w = 1.0 / std::max(v.norm(), m_velocity_floor);
+        }
+        weight[i] = w;
+    }
+    if (!energy.allFinite()) throw NumericalError("non-finite incremental potential in the training batch");
+    if (with_gradient) {
+        const MatrixXd dX = grad * (weight / double(B)).asDiagonal();
+        model.backward(m_autoencoder.decoder_vjp(Zt, dX));
+    }
+    return weight.dot(energy) / double(B);
+}
+
+double IntegratorTrainer::loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch)
+{
+    return evaluate(model, batch, true);
+}
+
+double IntegratorTrainer::loss(LatentMlpModel& model, const IntegratorBatch& batch)
+{
+    return evaluate(model, batch, false);
+}
+
+double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
+{
+    const MatrixXd X1 = m_autoencoder.decode(samples.z_prev, samples.targets_prev);
+    const MatrixXd X2 = m_autoencoder.decode(samples.z_prev2, samples.targets_prev2);
+    double sum = 0.0;
+    for (Index i = 0; i < X1.cols(); ++i) {
+        const VectorXd d = X1.col(i) - X2.col(i);
+        sum += (as_rows(d).colwise().mean() / m_model.dt()).norm();
+    }
+    return sum / double(X1.cols());
+}
+
+namespace {
+void save_checkpoint(const std::string& path, LatentMlpModel& model, int epoch, const IntegratorTrainOptions& options)
+{
+    h5::AtomicOutput out(path);
+    {
+        h5::File f = h5::File::create(out.temp_path());
+        model.save(f, "integrator.");
+        f.set_attribute("/", "epoch", (long long)epoch);
+        f.set_attribute("/", "options", options.describe());
+    }
+    out.commit();
+}
+} // namespace
+
+IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const TrainingSamples& samples)
+{
+    Timer timer;
+    IntegratorTrainSummary summary;
+    const Index S = samples.size();
+    // Input standardisation and output scale from the (clean) training samples.
+    {
+        MatrixXd inputs(model.input_dim(), S);
+        inputs << samples.z_prev, samples.z_prev2, samples.p, samples.p_prev, samples.p_prev2;
+        model.inputs = nn::Standardizer::fit(inputs);
+        const MatrixXd dz = samples.z_target - samples.z_prev;
+        const VectorXd mean = dz.rowwise().mean();
+        VectorXd std = ((dz.colwise() - mean).array().square().rowwise().sum() / double(S)).sqrt();
+        for (Index c = 0; c < std.size(); ++c) {
+            if (!(std[c] > 1e-12)) std[c] = 1.0;
+        }
+        model.output_scale = std;
+    }
+    if (m_options.loss == IntegratorLoss::SelfSupervised && m_options.data_balancing) {
+        m_velocity_floor = std::max(m_options.balancing_floor * mean_input_speed(samples), 1e-12);
+    }
+    model.loss = to_string(m_options.loss);
+    model.description = m_options.describe();
+
+    int start_epoch = 0;
+    if (!m_options.checkpoint_path.empty() && std::filesystem::exists(m_options.checkpoint_path)) {
+        const h5::File f = h5::File::open(m_options.checkpoint_path);
+        if (f.attribute_string("/", "options") == m_options.describe()) {
+            LatentMlpModel saved = LatentMlpModel::load(f, "integrator.");
+            model.network = std::move(saved.network);
+            start_epoch = int(f.attribute_int("/", "epoch"));
+            summary.resumed = true;
+            log_info("resuming integrator training from %s at epoch %d", m_options.checkpoint_path.c_str(), start_epoch);
+        } else {
+            log_warn("ignoring checkpoint %s: it was made with other options", m_options.checkpoint_path.c_str());
+        }
+    }
+
+    nn::Adam adam(model.network.parameters(), {m_options.learning_rate});
+    std::vector<Index> order(static_cast<size_t>(S));
+    std::iota(order.begin(), order.end(), 0);
+    const Index batch = std::min<Index>(m_options.batch_size, S);
+    Progress progress("train " + to_string(m_options.loss) + " epoch", m_options.epochs,
+                      m_options.progress ? 2.0 : 1e30);
+    int epoch = start_epoch;
+    double epoch_loss = 0.0;
+    for (; epoch < m_options.epochs; ++epoch) {
+        // Seeding per epoch makes a resumed run draw the same batches and noise.
+        Rng rng(m_options.seed * 1000003ull + std::uint64_t(epoch));
+        std::shuffle(order.begin(), order.end(), rng.engine());
+        epoch_loss = 0.0;
+        int batches = 0;
+        for (Index start = 0; start + batch <= S || (start < S && batches == 0); start += batch) {
+            const Index end = std::min(start + batch, S);
+            const std::vector<Index> idx(order.begin() + start, order.begin() + end);
+            const IntegratorBatch b = make_batch(samples, idx, rng);
+            model.network.zero_grad();
+            epoch_loss += loss_and_gradient(model, b);
+            adam.step();
+            ++batches;
+        }
+        epoch_loss /= std::max(batches, 1);
+        if (m_options.progress) {
+            char extra[96];
+            std::snprintf(extra, sizeof extra, "loss %.6g", epoch_loss);
+            progress.update(epoch + 1, extra);
+        }
+        if (!m_options.checkpoint_path.empty() && (epoch + 1) % m_options.checkpoint_every == 0) {
+            save_checkpoint(m_options.checkpoint_path, model, epoch + 1, m_options);
+        }
+        if (m_options.max_seconds > 0.0 && timer.seconds() > m_options.max_seconds) {
+            summary.time_limited = true;
+            ++epoch;
+            break;
+        }
+    }
+    summary.epochs_run = epoch;
+    summary.final_loss = epoch_loss;
+    summary.seconds = timer.seconds();
+    if (m_options.progress) {
+        char extra[128];
+        std::snprintf(extra, sizeof extra, "final loss %.6g%s", epoch_loss, summary.time_limited ? " (time limit)" : "");
+        progress.finish(extra);
+    }
+    return summary;
+}
+
+} // namespace lb

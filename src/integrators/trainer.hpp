@@ -1,0 +1,116 @@
+#pragma once
+// Training of the latent MLP integrator (Li et al. 2025 §3.3, DESIGN §4).
+//
+// Losses (a switch each, so every ablation is one flag):
+//   self_supervised  L_i = E(x_t(z_t); x_{t−1}, x_{t−2}) = E_I + E_elastic + E_g [+ E_bc],
+//                    the full-space incremental potential of the decoded prediction, with
+//                    x_{t−1}, x_{t−2} decoded from the input latents and the Dirichlet penalty
+//                    w_bc Σ_B |x_i − x*_i|² for cloth and solids (rods: roots are hard).
+//                    ∂L/∂z_t = J_Dᵀ ∇E: one vector-Jacobian product through the frozen
+//                    decoder per sample; energies are evaluated in parallel over the batch.
+//   supervised_l2    L_i = ||z_t − z_t^gt||² (the baseline; same network).
+// Data balancing: L_i / max(|v_{t−1}|, v_floor), v_{t−1} = (1/N) Σ_j (x_{t−1}^j − x_{t−2}^j)/h
+//   of the decoded inputs (paper eq. 6); v_floor = balancing_floor × the mean |v| of the
+//   training samples, because the formula divides by zero for a system at rest (the first
+//   frames of every sequence, a cantilever at steady state).
+// Training noise: every batch is doubled with copies whose z_{t−1}, z_{t−2} get uniform
+//   noise U(−a, a), a = noise_fraction × the batch's per-component standard deviation;
+//   boundary parameters unchanged (paper eq. 5).
+// The batch loss is the mean over its (possibly doubled) samples.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "integrators/latent_mlp_integrator.hpp"
+#include "sim/physics_model.hpp"
+
+namespace lb {
+
+enum class IntegratorLoss { SelfSupervised, SupervisedL2 };
+std::string to_string(IntegratorLoss loss);
+IntegratorLoss integrator_loss_from_string(const std::string& name);
+
+struct IntegratorTrainOptions {
+    IntegratorLoss loss = IntegratorLoss::SelfSupervised;
+    std::vector<Index> hidden{256, 256, 256, 256, 256};
+    int epochs = 1000;
+    int batch_size = 256;
+    double learning_rate = 1e-4;
+    bool training_noise = true;
+    double noise_fraction = 0.1;
+    bool data_balancing = true;
+    double balancing_floor = 0.05;
+    double penalty_weight = 1e5;  ///< w_bc (cloth, solids)
+    std::uint64_t seed = 0;
+    /// Stop after this many seconds (0: no limit); the summary says so.
+    double max_seconds = 0.0;
+    std::string checkpoint_path;
+    int checkpoint_every = 100;
+    bool progress = true;
+    /// One line for logs and file attributes.
+    std::string describe() const;
+};
+
+/// Training samples from the training frames of a dataset: for every sequence and
+/// t ∈ [2, train_frames): latents of frames t−1, t−2 (encoded ground truth), the
+/// boundary parameters of t, t−1, t−2, the ground-truth latent of t, and the
+/// Dirichlet targets of the three frames. Columns are samples.
+struct TrainingSamples {
+    MatrixXd z_prev, z_prev2, z_target;          ///< latent × S
+    MatrixXd p, p_prev, p_prev2;                 ///< P × S
+    MatrixXd targets, targets_prev, targets_prev2;  ///< 3B × S
+    Index size() const { return z_prev.cols(); }
+};
+TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data);
+
+/// A mini-batch, after noise was (optionally) added.
+struct IntegratorBatch {
+    MatrixXd inputs;  ///< input_dim × B (unstandardised)
+    MatrixXd z_prev, z_prev2, z_target;
+    MatrixXd targets, targets_prev, targets_prev2;
+    Index size() const { return z_prev.cols(); }
+};
+
+struct IntegratorTrainSummary {
+    int epochs_run = 0;
+    double final_loss = 0.0;
+    double seconds = 0.0;
+    bool resumed = false;
+    bool time_limited = false;
+};
+
+class IntegratorTrainer {
+public:
+    IntegratorTrainer(const PhysicsModel& model, Autoencoder& autoencoder, IntegratorTrainOptions options);
+
+    /// Gather samples `indices`, doubled with noisy copies if training_noise.
+    IntegratorBatch make_batch(const TrainingSamples& samples, const std::vector<Index>& indices, Rng& rng) const;
+    /// Loss of the batch; accumulates its parameter gradients into the model (the
+    /// caller zeroes them). Network in training mode.
+    double loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch);
+    /// Loss of the batch without gradients (same definition).
+    double loss(LatentMlpModel& model, const IntegratorBatch& batch);
+
+    /// Fit the input standardiser and output scale from the samples, then train.
+    IntegratorTrainSummary train(LatentMlpModel& model, const TrainingSamples& samples);
+    /// The velocity floor of data balancing (set by train() or set_velocity_floor()).
+    double velocity_floor() const { return m_velocity_floor; }
+    void set_velocity_floor(double v) { m_velocity_floor = v; }
+    /// Mean |v_{t−1}| over the samples' ground-truth decoded inputs.
+    double mean_input_speed(const TrainingSamples& samples);
+
+private:
+    double evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient);
+
+    const PhysicsModel& m_model;
+    Autoencoder& m_autoencoder;
+    IntegratorTrainOptions m_options;
+    std::vector<IncrementalPotential> m_potentials;  ///< one per thread
+    double m_velocity_floor = 1e-6;
+};
+
+/// The paper's Table 2 integrator widths per scene (cloth 32×2, hair 512×3 / 256×3,
+/// solids 256×5); 256×5 for anything else.
+std::vector<Index> default_integrator_hidden(const std::string& scene_name);
+
+} // namespace lb

@@ -1,0 +1,165 @@
+#pragma once
+// The autoencoder of Li et al. 2025 §3.2 / DESIGN §4: an MLP-ResNet with
+// BatchNorm and Swish, encoder and decoder symmetric; the encoder's first layer
+// and the decoder's last layer are linear layers of width d_pca initialised from
+// a PCA of the training frames (basis and mean), then trained with the
+// full-space reconstruction MSE. Positions are BC-relative (bc_encoding.hpp).
+//
+// File format (HDF5): encoder.* and decoder.* state_dict-style datasets
+// (nn/serialization.hpp, with the encoder.architecture / decoder.architecture JSON
+// attributes) plus root attributes:
+//   format "latentbench.autoencoder/1", latent_dim, pca_dim (after clamping),
+//   hidden ("200,200,200", decoder order), batch_norm, residual (0/1),
+//   encoding ("rod_root" | "dirichlet_mean"), num_features F, num_dofs 3N,
+//   scene (dataset scene name), seed.
+// The decoder maps z to features f; positions are x = P f + offset(bc targets)
+// (bc_encoding.hpp), so scripts/nn_reference.py --prefix decoder. gives f.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/rng.hpp"
+#include "latent/bc_encoding.hpp"
+#include "nn/sequential.hpp"
+#include "sim/dataset.hpp"
+
+namespace lb {
+
+struct AutoencoderOptions {
+    // architecture
+    Index latent_dim = 4;
+    std::vector<Index> hidden{200, 200, 200};  ///< decoder widths after the latent; encoder mirrors them
+    Index pca_dim = 50;                        ///< clamped to the number of training frames and features
+    bool batch_norm = true;
+    bool residual = true;
+    // training (Adam, lr 1e-4, batch 500 in the paper)
+    int epochs = 2000;
+    int batch_size = 500;
+    double learning_rate = 1e-4;
+    /// Every k-th training frame goes to validation (k = round(1/validation_fraction)).
+    double validation_fraction = 0.1;
+    /// Early stopping: stop after this many epochs without a validation improvement (0: never).
+    int patience = 200;
+    std::uint64_t seed = 0;
+    /// Checkpoint file (empty: none); training resumes from it if it exists and matches.
+    std::string checkpoint_path;
+    int checkpoint_every = 100;
+    bool progress = true;
+};
+
+struct AutoencoderTrainSummary {
+    int epochs_run = 0;
+    int best_epoch = 0;
+    double best_validation_mse = 0.0;   ///< mean squared error per DOF (m²), best epoch
+    double final_train_mse = 0.0;
+    /// Relative RMS reconstruction error on validation frames: RMS(x̂ − x) / bbox diagonal.
+    double validation_relative_rmse = 0.0;
+    double seconds = 0.0;
+    bool resumed = false;
+    bool stopped_early = false;
+};
+
+class Autoencoder {
+public:
+    /// Builds encoder and decoder (PyTorch-default initialised from `seed`); pca_dim is
+    /// clamped to the number of features here and to S − 1 by initialize_pca.
+    /// pca_dim = 0 builds plain MLPs without PCA layers. Throws ConfigError on bad options.
+    Autoencoder(const PhysicsSpec& physics, const AutoencoderOptions& options, std::uint64_t seed);
+
+    Index latent_dim() const { return m_options.latent_dim; }
+    Index num_features() const { return m_encoding.num_features(); }
+    const AutoencoderOptions& options() const { return m_options; }
+    const BcRelativeEncoding& encoding() const { return m_encoding; }
+    nn::Sequential& encoder() { return m_encoder; }
+    nn::Sequential& decoder() { return m_decoder; }
+    std::uint64_t seed() const { return m_seed; }
+    /// Rest bounding-box diagonal (m): the length scale of relative errors.
+    double length_scale() const { return m_length_scale; }
+    /// Scene the autoencoder was trained on (set by train_autoencoder, saved, loaded).
+    const std::string& scene_name() const { return m_scene_name; }
+    void set_scene_name(std::string name) { m_scene_name = std::move(name); }
+
+    /// Set the encoder's first and the decoder's last linear layer from a PCA of the
+    /// training features (F × S): W_enc = U_dᵀ, b_enc = −U_dᵀ μ, W_dec = U_d, b_dec = μ.
+    /// If min(pca_dim, S − 1) is below the current width, pca_dim is lowered to it
+    /// (recorded in options()) and both networks are rebuilt from seed() first.
+    /// Returns the fraction of the features' variance the d directions capture.
+    double initialize_pca(const MatrixXd& features);
+
+    // Evaluation mode (BatchNorm running statistics); columns are frames.
+    /// 3N × S positions → latent × S.
+    MatrixXd encode(const MatrixXd& X);
+    /// latent × S → F × S features.
+    MatrixXd decode_features(const MatrixXd& Z);
+    /// latent × S and 3B × S Dirichlet targets → 3N × S positions.
+    MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
+    /// Per column s: J_D(z_s)ᵀ ∂L/∂x_s, the gradient w.r.t. the latent of a loss of the
+    /// decoded positions (one vector-Jacobian product through the frozen decoder).
+    /// @param Z  latent × S, @param grad_x  3N × S  @return latent × S
+    MatrixXd decoder_vjp(const MatrixXd& Z, const MatrixXd& grad_x);
+    /// decode(encode(X)) in eval mode, compared with X: RMS over vertices and frames of
+    /// |x̂_i − x_i| (Euclidean per vertex), divided by length_scale().
+    /// @param X  3N × S  @param bc_targets  3B × S
+    double relative_rmse(const MatrixXd& X, const MatrixXd& bc_targets);
+
+    /// Written atomically (temporary file, then rename). See the file format above.
+    void save(const std::string& path);
+    /// Throws IoError naming the file if it is not an autoencoder file or its feature
+    /// count / encoding kind does not match `physics`.
+    static Autoencoder load(const std::string& path, const PhysicsSpec& physics);
+
+private:
+    struct NoNetworks { };
+    Autoencoder(const PhysicsSpec& physics, const AutoencoderOptions& options, std::uint64_t seed, NoNetworks);
+    void build_networks();
+
+    AutoencoderOptions m_options;
+    BcRelativeEncoding m_encoding;
+    nn::Sequential m_encoder;
+    nn::Sequential m_decoder;
+    std::uint64_t m_seed = 0;
+    double m_length_scale = 1.0;
+    std::string m_scene_name;
+};
+
+/// Training frames of a dataset as columns: positions (3N × S) and Dirichlet
+/// targets (3B × S), from frames [0, train_frames) of every sequence.
+struct FrameSet {
+    MatrixXd positions;
+    MatrixXd bc_targets;
+};
+FrameSet training_frames(const Dataset& data);
+
+/// Train with the reconstruction MSE; PCA-initialises first. Progress (epoch,
+/// train/validation loss, time) on stderr; checkpoints and resume as in the options.
+///
+/// Details:
+/// - The architecture is ae's; only the training fields of `options` are used
+///   (epochs, batch_size, learning_rate, validation_fraction, patience, seed,
+///   checkpoint_path, checkpoint_every, progress).
+/// - Split: training frames (training_frames(data)) in order; frame j goes to validation
+///   iff j % k == k − 1, k = max(2, round(1/validation_fraction)); validation_fraction ≤ 0
+///   means no validation (the training frames are then evaluated in eval mode instead).
+///   PCA is fitted on the remaining (training) frames only.
+/// - Loss: mean squared error per position DOF, computed on the features:
+///   ||f̂ − f||² / (3N · batch). For ground-truth frames the BC offset is exact, so this
+///   equals the position MSE (rods: the roots' error is identically zero).
+/// - Each epoch shuffles the training frames with Rng(options.seed) (Fisher–Yates) and
+///   splits them into ceil(S/batch_size) batches of near-equal size (BatchNorm needs ≥ 2).
+///   BatchNorm runs in training mode for the updates, eval mode for validation.
+/// - Early stopping: after `patience` epochs without a validation improvement; the
+///   best-validation weights are restored at the end either way.
+/// - Checkpoint (if checkpoint_path is set): every checkpoint_every epochs and at the end,
+///   written atomically; holds weights, BatchNorm statistics, the best weights, Adam state,
+///   epoch counters and the shuffling RNG state. If the file exists at the start and its
+///   fingerprint (architecture, seed, batch size, lr, validation split, training data hash)
+///   matches, training resumes from it bit-for-bit (epochs is then the total to reach);
+///   otherwise it is ignored with a warning and overwritten.
+/// - Same seed and data → bitwise-identical weights (single-threaded Eigen).
+AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& options);
+
+/// Scene-specific default latent size (rods 4, cloth 4, armadillo 12, bunny_ears 8,
+/// cantilever 4; anything else 4). Rod scenes match by the prefix "rods".
+Index default_latent_dim(const std::string& scene_name);
+
+} // namespace lb

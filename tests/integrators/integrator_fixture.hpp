@@ -1,0 +1,39 @@
+#pragma once
+// A tiny learning problem shared by the integrator tests: the small cantilever
+// (few frames), a small PCA-initialised autoencoder, a small integrator.
+#include <memory>
+
+#include "core/log.hpp"
+#include "integrators/trainer.hpp"
+#include "scene/scene.hpp"
+
+namespace lb::testing {
+
+struct TinyProblem {
+    Dataset data;
+    std::unique_ptr<PhysicsModel> model;
+    std::shared_ptr<Autoencoder> ae;
+    TrainingSamples samples;
+
+    explicit TinyProblem(const std::string& scene = "cantilever", int frames = 24, Index latent = 3)
+    {
+        set_log_level(LogLevel::Quiet);
+        Scene s = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene + ".toml", {"small"});
+        for (auto& seq : s.sequences) seq.train_frames = std::min(seq.train_frames, frames);
+        SimulateOptions so;
+        so.max_frames = frames;
+        so.progress = false;
+        data = simulate_scene(s, so);
+        model = std::make_unique<PhysicsModel>(data.physics);
+        AutoencoderOptions ao;
+        ao.latent_dim = latent;
+        ao.hidden = {16, 16};
+        ao.pca_dim = 8;
+        ao.progress = false;
+        ae = std::make_shared<Autoencoder>(data.physics, ao, 7);
+        ae->initialize_pca(ae->encoding().to_features(training_frames(data).positions));
+        samples = make_training_samples(*ae, data);
+    }
+};
+
+} // namespace lb::testing

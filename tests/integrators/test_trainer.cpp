@@ -1,0 +1,162 @@
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "integrators/integrator_fixture.hpp"
+#include "support/finite_difference.hpp"
+
+namespace lb {
+namespace {
+
+using testing::TinyProblem;
+
+std::vector<Index> all_indices(Index n)
+{
+    std::vector<Index> idx(static_cast<size_t>(n));
+    std::iota(idx.begin(), idx.end(), 0);
+    return idx;
+}
+
+/// Fit standardiser/scale as train() does, without training.
+void prepare(LatentMlpModel& net, const TrainingSamples& s)
+{
+    MatrixXd inputs(net.input_dim(), s.size());
+    inputs << s.z_prev, s.z_prev2, s.p, s.p_prev, s.p_prev2;
+    net.inputs = nn::Standardizer::fit(inputs);
+    net.output_scale = VectorXd::Constant(net.latent_dim, 0.1);
+}
+
+class LossGradient : public ::testing::TestWithParam<IntegratorLoss> { };
+
+// ∂L/∂θ of the integrator weights (through the decoder, the energy and the
+// balancing weights) against central finite differences of the loss.
+TEST_P(LossGradient, MatchesFiniteDifferences)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    o.loss = GetParam();
+    o.hidden = {8, 8};
+    o.training_noise = true;
+    o.data_balancing = true;
+    IntegratorTrainer trainer(*p.model, *p.ae, o);
+    trainer.set_velocity_floor(1e-3);
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    prepare(net, p.samples);
+    Rng rng(11);
+    std::vector<Index> idx = all_indices(std::min<Index>(p.samples.size(), 6));
+    const IntegratorBatch batch = trainer.make_batch(p.samples, idx, rng);
+
+    auto params = net.network.parameters();
+    net.network.zero_grad();
+    trainer.loss_and_gradient(net, batch);
+    // Check a spread of entries of every parameter tensor.
+    std::vector<std::pair<size_t, Index>> entries;
+    for (size_t k = 0; k < params.size(); ++k) {
+        for (Index j = 0; j < params[k].value.size(); j += std::max<Index>(1, params[k].value.size() / 5)) {
+            entries.push_back({k, j});
+        }
+    }
+    VectorXd theta(Index(entries.size())), analytic(Index(entries.size()));
+    for (size_t e = 0; e < entries.size(); ++e) {
+        theta[Index(e)] = params[entries[e].first].value.data()[entries[e].second];
+        analytic[Index(e)] = params[entries[e].first].grad.data()[entries[e].second];
+    }
+    auto f = [&](const VectorXd& th) {
+        for (size_t e = 0; e < entries.size(); ++e) params[entries[e].first].value.data()[entries[e].second] = th[Index(e)];
+        const double value = trainer.loss(net, batch);
+        for (size_t e = 0; e < entries.size(); ++e) params[entries[e].first].value.data()[entries[e].second] = theta[Index(e)];
+        return value;
+    };
+    testing::FdOptions fd;
+    fd.step = 1e-6;
+    fd.tol = 2e-4;
+    fd.scale = 1e-6 * analytic.cwiseAbs().maxCoeff();
+    EXPECT_TRUE(testing::check_gradient(f, [&](const VectorXd&) { return analytic; }, theta, fd, "dL/dtheta"));
+    EXPECT_GT(analytic.cwiseAbs().maxCoeff(), 0.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Losses, LossGradient,
+                         ::testing::Values(IntegratorLoss::SelfSupervised, IntegratorLoss::SupervisedL2));
+
+TEST(TrainingNoise, DoublesTheBatchWithBoundedLatentNoise)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    o.training_noise = true;
+    IntegratorTrainer trainer(*p.model, *p.ae, o);
+    Rng rng(5);
+    const std::vector<Index> idx = all_indices(std::min<Index>(p.samples.size(), 10));
+    const Index n = Index(idx.size());
+    const IntegratorBatch b = trainer.make_batch(p.samples, idx, rng);
+    ASSERT_EQ(b.size(), 2 * n);
+    const Index L = p.ae->latent_dim();
+    const MatrixXd clean = b.z_prev.leftCols(n);
+    const VectorXd mean = clean.rowwise().mean();
+    const VectorXd std = ((clean.colwise() - mean).array().square().rowwise().sum() / double(n)).sqrt();
+    for (Index i = 0; i < n; ++i) {
+        EXPECT_EQ(b.z_prev.col(i), p.samples.z_prev.col(idx[size_t(i)]));
+        const VectorXd noise = b.z_prev.col(n + i) - b.z_prev.col(i);
+        for (Index c = 0; c < L; ++c) EXPECT_LE(std::abs(noise[c]), 0.1 * std[c] + 1e-15);
+        // Boundary parameters and targets unchanged; the noisy inputs carry the noisy latents.
+        EXPECT_EQ(b.inputs.col(n + i).tail(b.inputs.rows() - 2 * L), b.inputs.col(i).tail(b.inputs.rows() - 2 * L));
+        EXPECT_EQ(b.inputs.col(n + i).head(L), b.z_prev.col(n + i));
+        EXPECT_EQ(b.targets.col(n + i), b.targets.col(i));
+    }
+    EXPECT_GT((b.z_prev.rightCols(n) - b.z_prev.leftCols(n)).norm(), 0.0);
+    EXPECT_GT((b.z_prev2.rightCols(n) - b.z_prev2.leftCols(n)).norm(), 0.0);
+
+    o.training_noise = false;
+    IntegratorTrainer plain(*p.model, *p.ae, o);
+    EXPECT_EQ(plain.make_batch(p.samples, idx, rng).size(), n);
+}
+
+TEST(DataBalancing, DividesEachSampleByItsMeanVelocity)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    o.training_noise = false;
+    o.hidden = {8};
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    prepare(net, p.samples);
+    Rng rng(1);
+    const double floor = 1e-4;
+    for (Index i : {Index(0), Index(5), p.samples.size() - 1}) {
+        const IntegratorBatch b = IntegratorTrainer(*p.model, *p.ae, o).make_batch(p.samples, {i}, rng);
+        o.data_balancing = false;
+        IntegratorTrainer off(*p.model, *p.ae, o);
+        const double plain = off.loss(net, b);
+        o.data_balancing = true;
+        IntegratorTrainer on(*p.model, *p.ae, o);
+        on.set_velocity_floor(floor);
+        const double balanced = on.loss(net, b);
+        // |v_{t−1}| of the decoded inputs, computed independently.
+        const MatrixXd x1 = p.ae->decode(b.z_prev, b.targets_prev);
+        const MatrixXd x2 = p.ae->decode(b.z_prev2, b.targets_prev2);
+        Vector3d v = Vector3d::Zero();
+        for (Index j = 0; j < p.model->num_vertices(); ++j) v += (x1.col(0) - x2.col(0)).segment<3>(3 * j);
+        v /= double(p.model->num_vertices()) * p.model->dt();
+        EXPECT_NEAR(balanced, plain / std::max(v.norm(), floor), 1e-9 * std::abs(plain / std::max(v.norm(), floor)));
+    }
+}
+
+TEST(SelfSupervisedLoss, DecreasesOnATinyScene)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    o.hidden = {32, 32};
+    o.epochs = 1;
+    o.batch_size = 8;
+    o.learning_rate = 1e-3;
+    o.progress = false;
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    IntegratorTrainer first(*p.model, *p.ae, o);
+    const double loss_after_1 = first.train(net, p.samples).final_loss;
+    o.epochs = 60;
+    LatentMlpModel net2 = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    IntegratorTrainer longer(*p.model, *p.ae, o);
+    const double loss_after_60 = longer.train(net2, p.samples).final_loss;
+    EXPECT_LT(loss_after_60, loss_after_1) << "60 epochs: " << loss_after_60 << ", 1 epoch: " << loss_after_1;
+}
+
+} // namespace
+} // namespace lb
