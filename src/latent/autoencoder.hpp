@@ -51,7 +51,7 @@ struct AutoencoderTrainSummary {
     int epochs_run = 0;
     int best_epoch = 0;
     double best_validation_mse = 0.0;   ///< mean squared error per DOF (m²), best epoch
-    double final_train_mse = 0.0;
+    double final_train_mse = 0.0;       ///< training-mode loss averaged over the last epoch's batches
     /// Relative RMS reconstruction error on validation frames: RMS(x̂ − x) / bbox diagonal.
     double validation_relative_rmse = 0.0;
     double seconds = 0.0;
@@ -145,7 +145,8 @@ FrameSet training_frames(const Dataset& data);
 ///   ||f̂ − f||² / (3N · batch). For ground-truth frames the BC offset is exact, so this
 ///   equals the position MSE (rods: the roots' error is identically zero).
 /// - Each epoch shuffles the training frames with Rng(options.seed) (Fisher–Yates) and
-///   splits them into ceil(S/batch_size) batches of near-equal size (BatchNorm needs ≥ 2).
+///   splits them into min(ceil(S/batch_size), S/2) batches of near-equal size (so none
+///   has fewer than the 2 frames training-mode BatchNorm needs).
 ///   BatchNorm runs in training mode for the updates, eval mode for validation.
 /// - Early stopping: after `patience` epochs without a validation improvement; the
 ///   best-validation weights are restored at the end either way.

@@ -17,6 +17,12 @@ struct AdamOptions {
     double weight_decay = 0.0;
 };
 
+/// Everything an optimiser checkpoint needs to resume bit for bit.
+struct AdamState {
+    long long step = 0;
+    std::vector<MatrixXd> m, v;  ///< first / second moments, one per parameter (parameter shapes)
+};
+
 class Adam {
 public:
     /// The parameter references must stay valid (their network alive) while the
@@ -30,14 +36,19 @@ public:
 
     double learning_rate() const { return m_options.lr; }
     void set_learning_rate(double lr) { m_options.lr = lr; }
-    long long steps() const { return m_step; }
+    long long steps() const { return m_state.step; }
     const AdamOptions& options() const { return m_options; }
+
+    /// Step count and moments (for checkpoints).
+    const AdamState& state() const { return m_state; }
+    /// Restore a state taken from state(); throws std::invalid_argument if the number
+    /// or shapes of the moments do not match the parameters.
+    void set_state(AdamState state);
 
 private:
     std::vector<ParameterRef> m_parameters;
     AdamOptions m_options;
-    std::vector<MatrixXd> m_m, m_v;  ///< first and second moments, one per parameter
-    long long m_step = 0;
+    AdamState m_state;
 };
 
 } // namespace lb::nn

@@ -35,13 +35,15 @@ public:
 
     double eps() const { return m_eps; }
     double momentum() const { return m_momentum; }
-    VectorXd& weight() { return m_weight; }
+    // Mutable access through Maps: assignment copies into the existing storage, so
+    // ParameterRefs and optimisers stay attached (see Linear::weight).
+    Eigen::Map<VectorXd> weight() { return {m_weight.data(), m_weight.size()}; }
     const VectorXd& weight() const { return m_weight; }
-    VectorXd& bias() { return m_bias; }
+    Eigen::Map<VectorXd> bias() { return {m_bias.data(), m_bias.size()}; }
     const VectorXd& bias() const { return m_bias; }
-    VectorXd& running_mean() { return m_running_mean; }
+    Eigen::Map<VectorXd> running_mean() { return {m_running_mean.data(), m_running_mean.size()}; }
     const VectorXd& running_mean() const { return m_running_mean; }
-    VectorXd& running_var() { return m_running_var; }
+    Eigen::Map<VectorXd> running_var() { return {m_running_var.data(), m_running_var.size()}; }
     const VectorXd& running_var() const { return m_running_var; }
     long long num_batches_tracked() const { return static_cast<long long>(m_num_batches_tracked(0, 0)); }
 

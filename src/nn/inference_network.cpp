@@ -1,5 +1,6 @@
 #include "nn/inference_network.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <sstream>
 #include <stdexcept>
@@ -99,6 +100,44 @@ void packed_gemv(const S* packed, const S* bias, const S* x, Index in, Index pan
             for (int v = 0; v < vectors_per_panel; ++v) acc[v] = Ops::fmadd(Ops::load(col + v * L), xj, acc[v]);
         }
         for (int v = 0; v < vectors_per_panel; ++v) Ops::storeu(yp + v * L, acc[v]);
+    }
+}
+
+/// Rows of a panel of the transposed weights used by the reverse-mode kernel.
+constexpr int transposed_vectors_per_panel = 4;
+template <typename S>
+constexpr Index transposed_panel_rows()
+{
+    return Index(Simd<S>::lanes) * transposed_vectors_per_panel;
+}
+
+/// Y[:, c] += Wᵀ A[:, c] for KC columns, with Wᵀ packed in panels of RT rows (input
+/// features): panel p holds, for every output i, the RT weights W(i, pRT .. pRT+RT)
+/// contiguously. Each weight vector is loaded once and used for all KC columns.
+/// Y must have panels·RT rows (padded); A holds `out` rows.
+template <typename S, int KC>
+void packed_transpose_product(const S* packed_t, Index out, Index panels, const S* A, Index lda, S* Y, Index ldy)
+{
+    using Ops = Simd<S>;
+    using V = typename Ops::V;
+    constexpr int L = Ops::lanes;
+    constexpr int NV = transposed_vectors_per_panel;
+    constexpr Index RT = transposed_panel_rows<S>();
+    for (Index p = 0; p < panels; ++p) {
+        V acc[KC][NV];
+        for (int c = 0; c < KC; ++c)
+            for (int v = 0; v < NV; ++v) acc[c][v] = Ops::loadu(Y + c * ldy + p * RT + v * L);
+        const S* P = packed_t + p * out * RT;
+        for (Index i = 0; i < out; ++i) {
+            V w[NV];
+            for (int v = 0; v < NV; ++v) w[v] = Ops::load(P + i * RT + v * L);
+            for (int c = 0; c < KC; ++c) {
+                const V a = Ops::set1(A[c * lda + i]);
+                for (int v = 0; v < NV; ++v) acc[c][v] = Ops::fmadd(w[v], a, acc[c][v]);
+            }
+        }
+        for (int c = 0; c < KC; ++c)
+            for (int v = 0; v < NV; ++v) Ops::storeu(Y + c * ldy + p * RT + v * L, acc[c][v]);
     }
 }
 
@@ -276,7 +315,7 @@ Eigen::Matrix<S, Eigen::Dynamic, 1> padded_vector(const VectorXd& v)
 
 /// Row-wise scaling M.row(r) *= act'(pre[r]).
 template <typename M, typename Vec>
-void scale_rows_by_derivative(ActivationKind kind, const Vec& pre, M& m)
+void scale_rows_by_derivative(ActivationKind kind, const Vec& pre, M&& m)
 {
     if (kind == ActivationKind::identity) return;
     for (Index r = 0; r < m.rows(); ++r) m.row(r) *= activation_derivative(kind, pre[r]);
@@ -328,6 +367,13 @@ BasicInferenceNetwork<S>::BasicInferenceNetwork(const Sequential& net, const Sta
                 for (Index j = 0; j < op.in; ++j)
                     for (Index i = 0; i < R && p * R + i < op.out; ++i)
                         op.packed[static_cast<std::size_t>((p * op.in + j) * R + i)] = op.W(p * R + i, j);
+            constexpr Index RT = transposed_panel_rows<S>();
+            const Index t_panels = (op.in + RT - 1) / RT;
+            op.packed_t.assign(static_cast<std::size_t>(t_panels * op.out * RT), S(0));
+            for (Index p = 0; p < t_panels; ++p)
+                for (Index i = 0; i < op.out; ++i)
+                    for (Index r = 0; r < RT && p * RT + r < op.in; ++r)
+                        op.packed_t[static_cast<std::size_t>((p * op.out + i) * RT + r)] = op.W(i, p * RT + r);
         } else {
             op.out = c.sizes[static_cast<std::size_t>(d.dst)];
             op.in = c.sizes[static_cast<std::size_t>(d.src)];
@@ -432,12 +478,13 @@ void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, 
     }
 
     if (mode == JacobianMode::reverse) {
+        // Adjoints with rows padded to whole panels (the packed kernel writes full panels).
         for (std::size_t b = 0; b < m_adjoint.size(); ++b) {
-            m_adjoint[b].resize(m_buffer_size[b], k);
+            m_adjoint[b].resize(padded<S>(m_buffer_size[b]), k);
             m_adjoint[b].setZero();
         }
         if (special) {
-            m_adjoint[static_cast<std::size_t>(last.src)] = m_rows_weight.transpose();
+            m_adjoint[static_cast<std::size_t>(last.src)].topRows(last.in) = m_rows_weight.transpose();
         } else {
             for (Index i = 0; i < k; ++i)
                 m_adjoint[static_cast<std::size_t>(m_output)](rows[static_cast<std::size_t>(i)], i) = S(1);
@@ -446,24 +493,38 @@ void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, 
             const Op& op = m_ops[i];
             Matrix& a_dst = m_adjoint[static_cast<std::size_t>(op.dst)];
             Matrix& a_src = m_adjoint[static_cast<std::size_t>(op.src)];
-            scale_rows_by_derivative(op.act, m_pre[i], a_dst);
+            scale_rows_by_derivative(op.act, m_pre[i], a_dst.topRows(op.out));
             switch (op.kind) {
-            case Op::Kind::affine:
-                a_src.noalias() += op.W.transpose() * a_dst;
+            case Op::Kind::affine: {
+                constexpr Index RT = transposed_panel_rows<S>();
+                const Index t_panels = (op.in + RT - 1) / RT;
+                for (Index c = 0; c < k;) {
+                    const Index kc = std::min<Index>(3, k - c);
+                    const S* A = a_dst.data() + c * a_dst.rows();
+                    S* Y = a_src.data() + c * a_src.rows();
+                    if (kc == 3)
+                        packed_transpose_product<S, 3>(op.packed_t.data(), op.out, t_panels, A, a_dst.rows(), Y, a_src.rows());
+                    else if (kc == 2)
+                        packed_transpose_product<S, 2>(op.packed_t.data(), op.out, t_panels, A, a_dst.rows(), Y, a_src.rows());
+                    else
+                        packed_transpose_product<S, 1>(op.packed_t.data(), op.out, t_panels, A, a_dst.rows(), Y, a_src.rows());
+                    c += kc;
+                }
                 if (!op.accumulate) a_dst.setZero();
                 break;
+            }
             case Op::Kind::scale:
-                a_src += op.b.asDiagonal() * a_dst;
+                a_src.topRows(op.in) += op.b.asDiagonal() * a_dst.topRows(op.out);
                 a_dst.setZero();
                 break;
             case Op::Kind::act:
-                a_src += a_dst;
+                a_src.topRows(op.in) += a_dst.topRows(op.out);
                 a_dst.setZero();
                 break;
-            case Op::Kind::add: a_src += a_dst; break;
+            case Op::Kind::add: a_src.topRows(op.in) += a_dst.topRows(op.out); break;
             }
         }
-        J = m_adjoint[0].transpose();
+        J = m_adjoint[0].topRows(m_in).transpose();
         return;
     }
 

@@ -20,7 +20,16 @@
 // contiguous), so each GEMV streams its weights exactly once, sequentially, with R
 // independent FMA accumulators held in registers (AVX2+FMA; a portable loop
 // otherwise). Buffers are padded to whole panels. evaluate() performs no heap
-// allocation (tested by counting malloc calls).
+// allocation (tested by counting malloc calls). The per-frame cost is bound by
+// streaming the weights from L3 (≈3.9 MB float for the armadillo integrator +
+// decoder); bench_nn's "gemv_bound" rows measure the GEMVs alone for comparison.
+//
+// jacobian_rows: a primal pass (skipping the final PCA layer when it is a plain
+// Linear, whose Jacobian rows are just W(rows, :)) keeps the pre-activations, then
+// reverse mode runs all requested rows at once through Wᵀ packed the same way
+// (panels of 4 SIMD vectors, every weight vector loaded once for up to 3 rows), so
+// one vertex costs about two passes over the hidden-layer weights. Forward mode
+// (tangents = identity on the latent) uses Eigen products on plain copies of W.
 #include <string>
 #include <vector>
 
@@ -82,7 +91,8 @@ public:
         bool accumulate = false;  ///< affine: dst += ... instead of dst = ...
         ActivationKind act = ActivationKind::identity;
         Index in = 0, out = 0;
-        std::vector<Scalar, Eigen::aligned_allocator<Scalar>> packed;  ///< affine: panel-packed W
+        std::vector<Scalar, Eigen::aligned_allocator<Scalar>> packed;    ///< affine: panel-packed W
+        std::vector<Scalar, Eigen::aligned_allocator<Scalar>> packed_t;  ///< affine: panel-packed Wᵀ (reverse mode)
         Matrix W;   ///< affine: out × in, plain (derivatives)
         Vector b;   ///< affine: bias padded to whole panels;  scale: s
         Vector t;   ///< scale: shift
@@ -102,8 +112,8 @@ private:
 
     // derivative workspaces
     std::vector<Vector> m_pre;                 ///< per op: pre-activation (tape)
-    std::vector<Matrix> m_adjoint;             ///< per buffer: size × k (reverse) or size × in (forward)
-    Matrix m_work, m_rows_weight;
+    std::vector<Matrix> m_adjoint;             ///< per buffer: padded size × k (reverse) or size × in (forward)
+    Matrix m_rows_weight;
 };
 
 using InferenceNetwork = BasicInferenceNetwork<float>;

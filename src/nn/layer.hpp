@@ -31,7 +31,9 @@ namespace lb::nn {
 
 /// A trainable tensor: its value and its gradient, both viewed as matrices
 /// (a bias is an n×1 matrix). Maps point into the owning layer's storage and stay
-/// valid while that layer is alive.
+/// valid while that layer is alive. (The same holds for code that keeps a Map to a
+/// plain MatrixXd: never move-assign a temporary into such a matrix, which swaps its
+/// storage away from the Map; assign through the Map or use .noalias().)
 struct ParameterRef {
     std::string name;              ///< state_dict name, e.g. "decoder.0.weight"
     Eigen::Map<MatrixXd> value;

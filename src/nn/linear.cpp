@@ -3,6 +3,7 @@
 #include <cassert>
 
 #include "nn/init.hpp"
+#include "nn/small_product.hpp"
 
 namespace lb::nn {
 
@@ -38,7 +39,12 @@ MatrixXd Linear::backward(const MatrixXd& dY, bool accumulate_parameter_gradient
         m_bias_grad += dY.rowwise().sum();
     }
     MatrixXd dX(in_features(), dY.cols());
-    dX.noalias() = m_weight.transpose() * dY;
+    if (dY.cols() <= small_product_max_columns) {
+        dX.setZero();
+        add_transpose_product(m_weight, dY, dX);
+    } else {
+        dX.noalias() = m_weight.transpose() * dY;
+    }
     return dX;
 }
 

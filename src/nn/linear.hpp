@@ -25,11 +25,13 @@ public:
     void describe(std::ostream& os) const override;
     std::unique_ptr<Layer> clone() const override { return std::make_unique<Linear>(*this); }
 
-    /// out × in
-    MatrixXd& weight() { return m_weight; }
+    /// out × in. Mutable access is a Map so that assigning to it copies into the
+    /// existing storage (a move-assignment would silently detach ParameterRefs and
+    /// optimisers); the shape is fixed at construction.
+    Eigen::Map<MatrixXd> weight() { return {m_weight.data(), m_weight.rows(), m_weight.cols()}; }
     const MatrixXd& weight() const { return m_weight; }
     /// out
-    VectorXd& bias() { return m_bias; }
+    Eigen::Map<VectorXd> bias() { return {m_bias.data(), m_bias.size()}; }
     const VectorXd& bias() const { return m_bias; }
 
 private:

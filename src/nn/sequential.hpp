@@ -2,6 +2,9 @@
 // An ordered container of layers (torch.nn.Sequential). Children are named by
 // their index, so parameters read "0.weight", "1.running_mean", ... under the
 // caller's prefix (e.g. "decoder.").
+//
+// Layers are held by pointer: moving a Sequential keeps every ParameterRef (and
+// an Adam built on them) valid; copying makes an independent deep copy.
 #include <vector>
 
 #include "nn/layer.hpp"

@@ -1,0 +1,97 @@
+#include <cstdio>
+#include <sstream>
+
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "latent/autoencoder.hpp"
+#include "sim/dataset.hpp"
+
+namespace lb::cli {
+
+namespace {
+
+std::vector<Index> parse_hidden(const std::string& text)
+{
+    std::vector<Index> widths;
+    std::stringstream ss(text);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        char* end = nullptr;
+        const long long v = std::strtoll(item.c_str(), &end, 10);
+        if (item.empty() || end == item.c_str() || *end != '\0' || v <= 0)
+            throw ConfigError("--hidden: expected comma-separated positive widths such as 200,200,200 (got '" + text +
+                              "')");
+        widths.push_back(Index(v));
+    }
+    if (widths.empty()) throw ConfigError("--hidden: at least one width is needed (got '" + text + "')");
+    return widths;
+}
+
+} // namespace
+
+void register_train_ae(CLI::App& app)
+{
+    struct Args {
+        std::string data;
+        std::string output;
+        long latent = 0;  // 0: the scene's default
+        int epochs = AutoencoderOptions{}.epochs;
+        int batch = AutoencoderOptions{}.batch_size;
+        double lr = AutoencoderOptions{}.learning_rate;
+        long pca = long(AutoencoderOptions{}.pca_dim);
+        std::string hidden = "200,200,200";
+        std::uint64_t seed = AutoencoderOptions{}.seed;
+        std::string checkpoint;
+        int checkpoint_every = AutoencoderOptions{}.checkpoint_every;
+        int patience = AutoencoderOptions{}.patience;
+        double validation = AutoencoderOptions{}.validation_fraction;
+    };
+    auto args = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("train-ae", "Train the BC-relative, PCA-initialised autoencoder on a dataset");
+    cmd->add_option("data", args->data, "Dataset HDF5 file (from 'latentbench simulate')")->required();
+    cmd->add_option("-o,--output", args->output, "Output autoencoder HDF5 file")->required();
+    cmd->add_option("--latent", args->latent,
+                    "Latent dimension (default per scene: rods 4, cloth 4, armadillo 12, bunny_ears 8, cantilever 4)");
+    cmd->add_option("--epochs", args->epochs, "Epochs (total, including resumed ones)")->capture_default_str();
+    cmd->add_option("--batch", args->batch, "Mini-batch size")->capture_default_str();
+    cmd->add_option("--lr", args->lr, "Adam learning rate")->capture_default_str();
+    cmd->add_option("--pca", args->pca, "Width of the PCA layers (clamped to frames − 1 and features; 0: none)")->capture_default_str();
+    cmd->add_option("--hidden", args->hidden, "Decoder hidden widths after the latent; the encoder mirrors them")->capture_default_str();
+    cmd->add_option("--seed", args->seed, "Seed of the initialisation and the shuffling")->capture_default_str();
+    cmd->add_option("--checkpoint", args->checkpoint,
+                    "Checkpoint file: written periodically, resumed from if it exists and matches");
+    cmd->add_option("--checkpoint-every", args->checkpoint_every, "Epochs between checkpoints")->capture_default_str();
+    cmd->add_option("--patience", args->patience, "Early stopping patience in epochs (0: never)")->capture_default_str();
+    cmd->add_option("--validation", args->validation,
+                    "Fraction of training frames held out for validation (every k-th frame)")->capture_default_str();
+    cmd->callback([args] {
+        if (args->latent < 0) throw ConfigError("--latent must be positive (got " + std::to_string(args->latent) + ")");
+        const Dataset data = load_dataset(args->data);
+        AutoencoderOptions options;
+        options.latent_dim = args->latent > 0 ? Index(args->latent) : default_latent_dim(data.scene_name);
+        options.epochs = args->epochs;
+        options.batch_size = args->batch;
+        options.learning_rate = args->lr;
+        options.pca_dim = Index(args->pca);
+        options.hidden = parse_hidden(args->hidden);
+        options.seed = args->seed;
+        options.checkpoint_path = args->checkpoint;
+        options.checkpoint_every = args->checkpoint_every;
+        options.patience = args->patience;
+        options.validation_fraction = args->validation;
+        options.progress = log_level() >= LogLevel::Info;
+
+        Autoencoder ae(data.physics, options, options.seed);
+        ae.set_scene_name(data.scene_name);
+        const AutoencoderTrainSummary s = train_autoencoder(ae, data, options);
+        ae.save(args->output);
+        std::printf("wrote %s: scene %s, %ld features -> latent %ld (pca %ld), %d epochs (best %d%s%s), "
+                    "validation MSE %.4e m², validation relative RMSE %.4e, %.1f s\n",
+                    args->output.c_str(), data.scene_name.c_str(), long(ae.num_features()), long(ae.latent_dim()),
+                    long(ae.options().pca_dim), s.epochs_run, s.best_epoch, s.stopped_early ? ", stopped early" : "",
+                    s.resumed ? ", resumed" : "", s.best_validation_mse, s.validation_relative_rmse, s.seconds);
+    });
+}
+
+} // namespace lb::cli

@@ -1,0 +1,138 @@
+#include "latent/bc_encoding.hpp"
+
+#include <string>
+
+#include "core/error.hpp"
+
+namespace lb {
+
+BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics)
+    : m_rod_relative(physics.mesh.kind == MeshKind::Rods),
+      m_num_dofs(3 * physics.mesh.num_vertices()),
+      m_bc_indices(physics.bc_indices)
+{
+    const Index N = physics.mesh.num_vertices();
+    if (m_bc_indices.empty())
+        throw ConfigError("BC-relative encoding: the physics has no Dirichlet vertices to encode relative to");
+    std::vector<int> bc_slot(static_cast<std::size_t>(N), -1);  // vertex -> index within bc_indices
+    for (std::size_t b = 0; b < m_bc_indices.size(); ++b) {
+        const int v = m_bc_indices[b];
+        if (v < 0 || v >= N)
+            throw ConfigError("BC-relative encoding: Dirichlet vertex " + std::to_string(v) + " outside the mesh (" +
+                              std::to_string(N) + " vertices)");
+        bc_slot[static_cast<std::size_t>(v)] = static_cast<int>(b);
+    }
+
+    if (!m_rod_relative) {
+        m_num_features = m_num_dofs;
+        return;
+    }
+
+    // Rods: every vertex belongs to one rod whose root (chain start) is a Dirichlet vertex.
+    constexpr int unassigned = -1, is_root = -2;
+    std::vector<int> root_slot(static_cast<std::size_t>(N), unassigned);
+    const auto& rods = physics.mesh.rods;
+    if (rods.empty()) throw ConfigError("BC-relative encoding: a rod mesh without rod chains (mesh.rods is empty)");
+    for (std::size_t r = 0; r < rods.size(); ++r) {
+        const auto& chain = rods[r];
+        if (chain.empty()) throw ConfigError("BC-relative encoding: rod " + std::to_string(r) + " is empty");
+        const int root = chain.front();
+        const int slot = bc_slot[static_cast<std::size_t>(root)];
+        if (slot < 0)
+            throw ConfigError("BC-relative encoding: the root vertex " + std::to_string(root) + " of rod " +
+                              std::to_string(r) + " is not a Dirichlet vertex (root-relative encoding needs "
+                              "prescribed roots)");
+        root_slot[static_cast<std::size_t>(root)] = is_root;
+        for (std::size_t k = 1; k < chain.size(); ++k) {
+            const int v = chain[k];
+            if (root_slot[static_cast<std::size_t>(v)] != unassigned)
+                throw ConfigError("BC-relative encoding: vertex " + std::to_string(v) + " belongs to two rods");
+            root_slot[static_cast<std::size_t>(v)] = slot;
+        }
+    }
+    // Features in ascending vertex order, roots skipped.
+    for (Index v = 0; v < N; ++v) {
+        const int s = root_slot[static_cast<std::size_t>(v)];
+        if (s == unassigned)
+            throw ConfigError("BC-relative encoding: vertex " + std::to_string(v) + " belongs to no rod");
+        if (s == is_root) continue;
+        m_rod_vertices.emplace_back(static_cast<int>(v), s);
+    }
+    m_num_features = 3 * static_cast<Index>(m_rod_vertices.size());
+}
+
+Vector3d BcRelativeEncoding::bc_mean(const Eigen::Ref<const VectorXd>& x) const
+{
+    Vector3d mean = Vector3d::Zero();
+    for (int v : m_bc_indices) mean += x.segment<3>(3 * Index(v));
+    return mean / double(m_bc_indices.size());
+}
+
+MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const
+{
+    if (X.rows() != m_num_dofs)
+        throw std::invalid_argument("BcRelativeEncoding::to_features: expected " + std::to_string(m_num_dofs) +
+                                    " rows, got " + std::to_string(X.rows()));
+    const Index S = X.cols();
+    MatrixXd F(m_num_features, S);
+    for (Index s = 0; s < S; ++s) {
+        if (m_rod_relative) {
+            for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
+                const auto [v, slot] = m_rod_vertices[k];
+                const int root = m_bc_indices[static_cast<std::size_t>(slot)];
+                F.col(s).segment<3>(3 * Index(k)) = X.col(s).segment<3>(3 * Index(v)) - X.col(s).segment<3>(3 * Index(root));
+            }
+        } else {
+            const Vector3d mean = bc_mean(X.col(s));
+            F.col(s) = X.col(s);
+            for (Index i = 0; i < m_num_dofs / 3; ++i) F.col(s).segment<3>(3 * i) -= mean;
+        }
+    }
+    return F;
+}
+
+MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& targets) const
+{
+    const Index B = static_cast<Index>(m_bc_indices.size());
+    if (F.rows() != m_num_features || targets.rows() != 3 * B || targets.cols() != F.cols())
+        throw std::invalid_argument("BcRelativeEncoding::to_positions: expected " + std::to_string(m_num_features) +
+                                    " × S features and " + std::to_string(3 * B) + " × S targets, got " +
+                                    std::to_string(F.rows()) + " × " + std::to_string(F.cols()) + " and " +
+                                    std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
+    const Index S = F.cols();
+    MatrixXd X(m_num_dofs, S);
+    for (Index s = 0; s < S; ++s) {
+        if (m_rod_relative) {
+            // Roots take their targets (written for every Dirichlet vertex, then overwritten on
+            // the non-root ones, which are decoded like any other vertex: root + feature).
+            for (Index b = 0; b < B; ++b)
+                X.col(s).segment<3>(3 * Index(m_bc_indices[std::size_t(b)])) = targets.col(s).segment<3>(3 * b);
+            for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
+                const auto [v, slot] = m_rod_vertices[k];
+                X.col(s).segment<3>(3 * Index(v)) =
+                    F.col(s).segment<3>(3 * Index(k)) + targets.col(s).segment<3>(3 * Index(slot));
+            }
+        } else {
+            Vector3d mean = Vector3d::Zero();
+            for (Index b = 0; b < B; ++b) mean += targets.col(s).segment<3>(3 * b);
+            mean /= double(B);
+            X.col(s) = F.col(s);
+            for (Index i = 0; i < m_num_dofs / 3; ++i) X.col(s).segment<3>(3 * i) += mean;
+        }
+    }
+    return X;
+}
+
+MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x) const
+{
+    if (grad_x.rows() != m_num_dofs)
+        throw std::invalid_argument("BcRelativeEncoding::gradient_to_features: expected " +
+                                    std::to_string(m_num_dofs) + " rows, got " + std::to_string(grad_x.rows()));
+    if (!m_rod_relative) return grad_x;  // P = I
+    MatrixXd G(m_num_features, grad_x.cols());
+    for (std::size_t k = 0; k < m_rod_vertices.size(); ++k)
+        G.middleRows<3>(3 * Index(k)) = grad_x.middleRows<3>(3 * Index(m_rod_vertices[k].first));
+    return G;
+}
+
+} // namespace lb

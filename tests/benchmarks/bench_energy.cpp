@@ -1,0 +1,127 @@
+// Element energy + Hessian assembly (HessianAssembler::assemble) for the elastic
+// energies on meshes of the scenes' sizes (DESIGN §5):
+//   tets   40×8×8-cell beam: 3,321 vertices, 15,360 tets (≈ the 3,340-vertex armadillo)
+//   shells 16×12 cloth grid: 192 vertices (the cloth scene)
+//   rods   10×10 rods × 18 / × 36 vertices: 1,800 / 3,600 vertices (rods_translate / rods_rotate)
+// Each benchmark runs with the element Hessians PSD-projected (as Newton does) and
+// unprojected (arg 0), to separate the projection's cost from the kernels'.
+// Counters: nnz of the assembled lower triangle, elements, and elements per second.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "core/rng.hpp"
+#include "energy/hessian_assembler.hpp"
+#include "energy/rod_bending.hpp"
+#include "energy/rod_stretching.hpp"
+#include "energy/shell_hinge_bending.hpp"
+#include "energy/shell_membrane.hpp"
+#include "energy/tet_stvk.hpp"
+#include "mesh/generators.hpp"
+
+namespace {
+
+using namespace lb;
+
+// A deformed state: rest + noise of `amplitude` (m) per coordinate, fixed seed.
+VectorXd deformed_state(const Mesh& mesh, double amplitude)
+{
+    Rng rng(1);
+    return flatten(mesh.rest_positions) + rng.uniform_vector(3 * mesh.num_vertices(), -amplitude, amplitude);
+}
+
+void run_assembly(benchmark::State& state, const Mesh& mesh, const EnergySum& energies, double amplitude)
+{
+    const bool project = state.range(0) != 0;
+    const VectorXi all_free = VectorXi::LinSpaced(3 * mesh.num_vertices(), 0, int(3 * mesh.num_vertices() - 1));
+    HessianAssembler assembler(all_free, energies);
+    const VectorXd x = deformed_state(mesh, amplitude);
+    Index elements = 0;
+    for (const auto& term : energies.terms()) elements += term.energy->num_elements();
+    for (auto _ : state) {
+        assembler.assemble(energies, x, project);
+        benchmark::DoNotOptimize(assembler.matrix().valuePtr());
+        benchmark::ClobberMemory();
+    }
+    state.counters["nnz"] = double(assembler.matrix().nonZeros());
+    state.counters["vertices"] = double(mesh.num_vertices());
+    state.counters["elements"] = double(elements);
+    state.counters["elements/s"] =
+        benchmark::Counter(double(elements), benchmark::Counter::kIsIterationInvariantRate);
+    state.SetLabel(project ? "psd-projected" : "unprojected");
+}
+
+Mesh armadillo_sized_beam()
+{
+    TetBeamOptions options;
+    options.nx = 40;
+    options.ny = 8;
+    options.nz = 8;
+    options.size = Vector3d(1.0, 0.2, 0.2);
+    return make_tet_beam(options);
+}
+
+void BM_TetStVK_Assemble(benchmark::State& state)
+{
+    static const Mesh mesh = armadillo_sized_beam();
+    EnergySum energies;
+    energies.add(std::make_shared<TetStVK>(mesh.rest_positions, mesh.elements, 1e7, 0.3));
+    run_assembly(state, mesh, energies, 0.005); // 20% of the 0.025 m cell
+}
+BENCHMARK(BM_TetStVK_Assemble)->Arg(1)->Arg(0)->ArgName("project")->Unit(benchmark::kMillisecond);
+
+// The element kernel alone (no projection, no scatter): value of the hot loop.
+void BM_TetStVK_ElementHessian(benchmark::State& state)
+{
+    static const Mesh mesh = armadillo_sized_beam();
+    const TetStVK energy(mesh.rest_positions, mesh.elements, 1e7, 0.3);
+    const VectorXd x = deformed_state(mesh, 0.005);
+    const bool project = state.range(0) != 0;
+    double H[144];
+    for (auto _ : state) {
+        for (Index t = 0; t < energy.num_elements(); ++t) {
+            energy.element_hessian(t, x, project, H);
+            benchmark::DoNotOptimize(H);
+        }
+    }
+    state.counters["elements/s"] =
+        benchmark::Counter(double(energy.num_elements()), benchmark::Counter::kIsIterationInvariantRate);
+    state.SetLabel(project ? "psd-projected, 1 thread" : "unprojected, 1 thread");
+}
+BENCHMARK(BM_TetStVK_ElementHessian)->Arg(1)->Arg(0)->ArgName("project")->Unit(benchmark::kMillisecond);
+
+void BM_Shell_Assemble(benchmark::State& state)
+{
+    ClothGridOptions options; // 16×12 vertices, 1 m × 0.75 m
+    static const Mesh mesh = make_cloth_grid(options);
+    EnergySum energies;
+    energies.add(std::make_shared<ShellMembrane>(mesh.rest_positions, mesh.elements, 1e5, 0.3, 1e-3));
+    energies.add(std::make_shared<ShellHingeBending>(mesh.rest_positions, shell_hinge_stencils(mesh.elements), 1e5,
+                                                     0.3, 1e-3));
+    run_assembly(state, mesh, energies, 0.01);
+}
+BENCHMARK(BM_Shell_Assemble)->Arg(1)->Arg(0)->ArgName("project")->Unit(benchmark::kMicrosecond);
+
+void BM_Rods_Assemble(benchmark::State& state)
+{
+    RodBundleOptions options;
+    options.num_rods_x = 10;
+    options.num_rods_y = 10;
+    options.vertices_per_rod = int(state.range(1));
+    options.length = 0.5;
+    options.spacing = 0.05;
+    const Mesh mesh = make_rod_bundle(options);
+    EnergySum energies;
+    energies.add(std::make_shared<RodStretching>(mesh.rest_positions, mesh.elements, 1e7, 1e-3));
+    energies.add(std::make_shared<RodBending>(mesh.rest_positions, rod_bending_stencils(mesh), 1e7, 1e-3));
+    run_assembly(state, mesh, energies, 0.002);
+}
+BENCHMARK(BM_Rods_Assemble)
+    ->Args({1, 18})
+    ->Args({0, 18})
+    ->Args({1, 36})
+    ->Args({0, 36})
+    ->ArgNames({"project", "vertices_per_rod"})
+    ->Unit(benchmark::kMillisecond);
+
+} // namespace

@@ -1,0 +1,69 @@
+// `latentbench train-ae` end to end: a trained file that loads, the summary line,
+// resuming from a checkpoint, and bad input (message, exit 1, no output file).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "latent/autoencoder.hpp"
+#include "latent/latent_test_support.hpp"
+#include "support/cli_runner.hpp"
+
+namespace lb {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::fresh_dir;
+using testing::run_cli;
+
+TEST(TrainAeCli, TrainsSavesAndResumes)
+{
+    const std::string dir = fresh_dir("train_ae_cli");
+    const std::string data = dir + "/cloth.h5", out = dir + "/ae.h5", ckpt = dir + "/ckpt.h5";
+    const Dataset dataset = latent_test::small_cloth_prefix(60);
+    save_dataset(dataset, data);
+
+    const std::string common = "train-ae " + data + " -o " + out +
+                               " --hidden 16,16 --pca 8 --batch 16 --lr 1e-3 --seed 3 --checkpoint " + ckpt;
+    auto r = run_cli(common + " --epochs 2");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("validation relative RMSE"), std::string::npos) << r.output;
+    ASSERT_TRUE(fs::exists(out));
+    ASSERT_TRUE(fs::exists(ckpt));
+    const Autoencoder ae = Autoencoder::load(out, dataset.physics);
+    EXPECT_EQ(ae.latent_dim(), 4);  // the cloth default
+    EXPECT_EQ(ae.options().hidden, (std::vector<Index>{16, 16}));
+    EXPECT_EQ(ae.options().pca_dim, 8);
+    EXPECT_EQ(ae.scene_name(), "cloth");
+
+    r = run_cli(common + " --epochs 4");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("resuming from checkpoint"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("4 epochs"), std::string::npos) << r.output;
+}
+
+TEST(TrainAeCli, BadInputFailsCleanly)
+{
+    const std::string dir = fresh_dir("train_ae_cli_bad");
+    const std::string data = dir + "/cloth.h5", out = dir + "/ae.h5";
+    save_dataset(latent_test::small_cloth_prefix(20), data);
+
+    struct Case {
+        std::string args, expected;
+    };
+    const std::vector<Case> cases = {
+        {"train-ae " + dir + "/missing.h5 -o " + out, "missing.h5"},
+        {"train-ae " + data + " -o " + out + " --hidden 16,0", "--hidden"},
+        {"train-ae " + data + " -o " + out + " --batch 1", "batch_size"},
+        {"train-ae " + data + " -o " + out + " --lr -1", "learning_rate"},
+    };
+    for (const auto& c : cases) {
+        const auto r = run_cli(c.args);
+        EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\n" << r.output;
+        EXPECT_FALSE(fs::exists(out)) << c.args;
+    }
+}
+
+} // namespace
+} // namespace lb

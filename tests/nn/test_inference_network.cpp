@@ -1,0 +1,213 @@
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+
+#include "nn/batch_norm.hpp"
+#include "nn/inference_network.hpp"
+#include "nn/linear.hpp"
+#include "nn/mlp_spec.hpp"
+#include "nn/network_derivatives.hpp"
+#include "nn/paper_architectures.hpp"
+#include "nn/residual_block.hpp"
+#include "nn_test_support.hpp"
+
+// ---- allocation counter ---------------------------------------------------------------
+// malloc/calloc/realloc are interposed for this test executable (glibc exports the
+// real implementations as __libc_*); Eigen and operator new both end in malloc.
+namespace {
+std::atomic<bool> g_count_allocations{false};
+std::atomic<long> g_allocations{0};
+} // namespace
+
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t n, std::size_t size);
+void* __libc_realloc(void* p, std::size_t size);
+
+void* malloc(std::size_t size)
+{
+    if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+    return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size)
+{
+    if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+    return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size)
+{
+    if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+    return __libc_realloc(p, size);
+}
+}
+
+namespace lb::nn {
+namespace {
+
+struct AllocationCounter {
+    AllocationCounter()
+    {
+        g_allocations = 0;
+        g_count_allocations = true;
+    }
+    ~AllocationCounter() { g_count_allocations = false; }
+    long count() const { return g_allocations.load(); }
+};
+
+/// ‖a − b‖∞ / max(‖b‖∞, 1e-30)
+double relative_error(const VectorXd& a, const VectorXd& b)
+{
+    return (a - b).cwiseAbs().maxCoeff() / std::max(b.cwiseAbs().maxCoeff(), 1e-30);
+}
+
+TEST(InferenceNetwork, AllocationCounterSeesAllocations)
+{
+    AllocationCounter counter;
+    VectorXd v = VectorXd::Ones(1000);
+    EXPECT_GT(counter.count(), 0) << "malloc interposition is not active, the no-allocation test would be vacuous";
+    EXPECT_EQ(v.sum(), 1000.0);
+}
+
+TEST(InferenceNetwork, MatchesDoubleForwardOnTable2Architectures)
+{
+    for (const auto& arch : table2_architectures()) {
+        Rng rng(81);
+        Sequential decoder = make_mlp(arch.decoder, rng);
+        Sequential integrator = make_mlp(arch.integrator, rng);
+        test::randomize_batch_norm(decoder, rng);
+        InferenceNetwork dec_f(decoder);
+        InferenceNetwork int_f(integrator);
+        InferenceNetworkD dec_d(decoder);
+        for (int trial = 0; trial < 3; ++trial) {
+            const VectorXd q = test::random_matrix(arch.integrator.in_dim, 1, rng, -2, 2).col(0);
+            const VectorXd z_ref = integrator.forward(q, false).col(0);
+            const VectorXd z_f = int_f.evaluate(q.cast<float>()).cast<double>();
+            EXPECT_LT(relative_error(z_f, z_ref), 1e-5) << arch.name << " integrator";
+
+            const VectorXd x_ref = decoder.forward(z_ref, false).col(0);
+            const VectorXd x_f = dec_f.evaluate(z_ref.cast<float>()).cast<double>();
+            const VectorXd x_d = dec_d.evaluate(z_ref);
+            EXPECT_LT(relative_error(x_f, x_ref), 1e-4) << arch.name << " decoder (float)";
+            EXPECT_LT(relative_error(x_d, x_ref), 1e-12) << arch.name << " decoder (double)";
+        }
+        if (arch.name == "armadillo") {
+            // BatchNorms folded, activations fused: 9 GEMVs and the 2 identity skips.
+            const auto& ops = dec_f.ops();
+            EXPECT_EQ(ops.size(), 11u) << dec_f.describe();
+            EXPECT_EQ(dec_f.multiply_adds(), 12 * 200 * 2 + 200 * 200 * 5 + 200 * 50 + 50 * 10020);
+        }
+    }
+}
+
+TEST(InferenceNetwork, FoldsTheInputStandardizer)
+{
+    Rng rng(82);
+    MlpSpec s;
+    s.in_dim = 7;
+    s.hidden = {16, 16};
+    s.out_dim = 3;
+    Sequential net = make_mlp(s, rng);
+    const MatrixXd data = test::random_matrix(7, 50, rng, -5.0, 20.0);
+    const Standardizer standardizer = Standardizer::fit(data);
+    InferenceNetworkD fast(net, &standardizer);
+    EXPECT_EQ(fast.ops().size(), 3u) << fast.describe();  // three affine ops, no separate scale
+    const VectorXd x = data.col(3);
+    const VectorXd expected = net.forward(standardizer.apply(x), false).col(0);
+    EXPECT_LT(relative_error(fast.evaluate(x), expected), 1e-12);
+}
+
+TEST(InferenceNetwork, HandlesUnfoldableLayers)
+{
+    // Leading BatchNorm and activation, a BatchNorm after an identity-skip block,
+    // activations not preceded by a Linear, an output activation.
+    Rng rng(83);
+    Sequential net;
+    net.emplace<BatchNorm1d>(5);
+    net.emplace<Activation>(ActivationKind::tanh);
+    net.emplace<Linear>(5, 8, rng);
+    net.emplace<ResidualBlock>(8, 8, true, ActivationKind::swish, rng);
+    net.emplace<BatchNorm1d>(8);
+    net.emplace<Swish>();
+    net.emplace<ResidualBlock>(8, 6, false, ActivationKind::relu, rng);
+    net.emplace<Activation>(ActivationKind::tanh);
+    net.emplace<Linear>(6, 4, rng);
+    net.emplace<BatchNorm1d>(4);
+    test::randomize_batch_norm(net, rng);
+    InferenceNetworkD fast_d(net);
+    InferenceNetwork fast_f(net);
+    for (int trial = 0; trial < 5; ++trial) {
+        const VectorXd x = test::random_matrix(5, 1, rng, -2, 2).col(0);
+        const VectorXd expected = net.forward(x, false).col(0);
+        EXPECT_LT(relative_error(fast_d.evaluate(x), expected), 1e-12) << fast_d.describe();
+        EXPECT_LT(relative_error(fast_f.evaluate(x.cast<float>()).cast<double>(), expected), 1e-5);
+    }
+    // The leading BatchNorm folds forward into the Linear only through the tanh: it must stay.
+    bool has_scale = false;
+    for (const auto& op : fast_d.ops()) has_scale |= op.kind == InferenceOpKind::scale;
+    EXPECT_TRUE(has_scale);
+}
+
+TEST(InferenceNetwork, JacobianRowsMatchDoublePath)
+{
+    Rng rng(84);
+    for (bool output_activation : {false, true}) {
+        MlpSpec s = table2_architecture("cloth").decoder;
+        s.output_activation = output_activation;
+        Sequential net = make_mlp(s, rng);
+        test::randomize_batch_norm(net, rng);
+        InferenceNetwork fast_f(net);
+        InferenceNetworkD fast_d(net);
+        const VectorXd z = test::random_matrix(4, 1, rng).col(0);
+        const std::vector<Index> vertex = {30, 31, 32};
+        const std::vector<Index> many = {0, 1, 2, 100, 101, 575};
+        for (const auto& rows : {vertex, many}) {
+            const MatrixXd expected = jacobian_rows(net, z, rows);
+            for (auto mode : {JacobianMode::forward, JacobianMode::reverse}) {
+                MatrixXf Jf(static_cast<Index>(rows.size()), 4);
+                MatrixXd Jd(static_cast<Index>(rows.size()), 4);
+                fast_f.jacobian_rows(z.cast<float>(), rows, Jf, mode);
+                fast_d.jacobian_rows(z, rows, Jd, mode);
+                const double scale = expected.cwiseAbs().maxCoeff();
+                EXPECT_LT((Jd - expected).cwiseAbs().maxCoeff(), 1e-12 * scale);
+                EXPECT_LT((Jf.cast<double>() - expected).cwiseAbs().maxCoeff(), 1e-4 * scale);
+            }
+        }
+    }
+}
+
+TEST(InferenceNetwork, EvaluateAndJacobianRowsDoNotAllocate)
+{
+    Rng rng(85);
+    const auto arch = table2_architecture("armadillo");
+    Sequential decoder = make_mlp(arch.decoder, rng);
+    Sequential integrator = make_mlp(arch.integrator, rng);
+    const Standardizer standardizer(arch.integrator.in_dim);
+    InferenceNetwork dec(decoder);
+    InferenceNetwork integ(integrator, &standardizer);
+    VectorXf q = VectorXf::Random(arch.integrator.in_dim);
+    VectorXf x(arch.full_dof);
+    const std::vector<Index> vertex = {300, 301, 302};
+    MatrixXf J(3, arch.latent_dim);
+    VectorXf z(arch.latent_dim);
+    integ.evaluate(q.data(), z.data());
+    dec.jacobian_rows(z, vertex, J);  // sizes the derivative workspaces
+    float checksum = 0;
+    long allocations = 0;
+    {
+        AllocationCounter counter;
+        for (int frame = 0; frame < 20; ++frame) {
+            integ.evaluate(q.data(), z.data());
+            dec.evaluate(z.data(), x.data());
+            checksum += x[0] + dec.evaluate(z)[5];
+            dec.jacobian_rows(z, vertex, J);
+            checksum += J(0, 0);
+        }
+        allocations = counter.count();
+    }
+    EXPECT_EQ(allocations, 0);
+    EXPECT_TRUE(std::isfinite(checksum));
+}
+
+} // namespace
+} // namespace lb::nn
