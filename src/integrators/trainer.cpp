@@ -12,6 +12,7 @@
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
 #include "nn/adam.hpp"
+#include "nn/serialization.hpp"
 
 namespace lb {
 
@@ -100,6 +101,9 @@ IntegratorBatch IntegratorTrainer::make_batch(const TrainingSamples& samples, co
     const Index copies = m_options.training_noise ? 2 : 1;
     const Index L = samples.z_prev.rows();
     IntegratorBatch b;
+    b.clean = n;
+    b.source.reserve(size_t(n * copies));
+    for (Index c = 0; c < copies; ++c) b.source.insert(b.source.end(), indices.begin(), indices.end());
     auto gather = [&](const MatrixXd& src, MatrixXd& dst) {
         dst.resize(src.rows(), n * copies);
         for (Index c = 0; c < copies; ++c) {
@@ -146,8 +150,8 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
     }
 
     // Self-supervised: the incremental potential of the decoded prediction.
-    const MatrixXd X1 = m_autoencoder.decode(batch.z_prev, batch.targets_prev);
-    const MatrixXd X2 = m_autoencoder.decode(batch.z_prev2, batch.targets_prev2);
+    const MatrixXd X1 = decoded_inputs(batch, 1);
+    const MatrixXd X2 = decoded_inputs(batch, 2);
     const MatrixXd Xt = m_autoencoder.decode(Zt, batch.targets);
     const Index n_dofs = Xt.rows();
     const double dt = m_model.dt();
@@ -176,6 +180,27 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
     return weight.dot(energy) / double(B);
 }
 
+void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
+{
+    m_decoded_prev = m_autoencoder.decode(samples.z_prev, samples.targets_prev);
+    m_decoded_prev2 = m_autoencoder.decode(samples.z_prev2, samples.targets_prev2);
+}
+
+MatrixXd IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, int which)
+{
+    const MatrixXd& z = which == 1 ? batch.z_prev : batch.z_prev2;
+    const MatrixXd& targets = which == 1 ? batch.targets_prev : batch.targets_prev2;
+    const MatrixXd& cache = which == 1 ? m_decoded_prev : m_decoded_prev2;
+    if (cache.size() == 0 || batch.source.size() != size_t(batch.size())) return m_autoencoder.decode(z, targets);
+    MatrixXd X(cache.rows(), batch.size());
+    for (Index i = 0; i < batch.clean; ++i) X.col(i) = cache.col(batch.source[size_t(i)]);
+    const Index noisy = batch.size() - batch.clean;
+    if (noisy > 0) {
+        X.rightCols(noisy) = m_autoencoder.decode(z.rightCols(noisy), targets.rightCols(noisy));
+    }
+    return X;
+}
+
 double IntegratorTrainer::loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch)
 {
     return evaluate(model, batch, true);
@@ -188,8 +213,9 @@ double IntegratorTrainer::loss(LatentMlpModel& model, const IntegratorBatch& bat
 
 double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 {
-    const MatrixXd X1 = m_autoencoder.decode(samples.z_prev, samples.targets_prev);
-    const MatrixXd X2 = m_autoencoder.decode(samples.z_prev2, samples.targets_prev2);
+    if (m_decoded_prev.cols() != samples.size()) cache_decoded_inputs(samples);
+    const MatrixXd& X1 = m_decoded_prev;
+    const MatrixXd& X2 = m_decoded_prev2;
     double sum = 0.0;
     for (Index i = 0; i < X1.cols(); ++i) {
         const VectorXd d = X1.col(i) - X2.col(i);
@@ -199,12 +225,14 @@ double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 }
 
 namespace {
-void save_checkpoint(const std::string& path, LatentMlpModel& model, int epoch, const IntegratorTrainOptions& options)
+void save_checkpoint(const std::string& path, LatentMlpModel& model, const nn::Adam& adam, int epoch,
+                     const IntegratorTrainOptions& options)
 {
     h5::AtomicOutput out(path);
     {
         h5::File f = h5::File::create(out.temp_path());
         model.save(f, "integrator.");
+        nn::save_adam_state(f, "integrator.", adam, model.network.parameters("integrator."));
         f.set_attribute("/", "epoch", (long long)epoch);
         f.set_attribute("/", "options", options.describe());
     }
@@ -230,18 +258,23 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
         }
         model.output_scale = std;
     }
+    if (m_options.loss == IntegratorLoss::SelfSupervised) cache_decoded_inputs(samples);
     if (m_options.loss == IntegratorLoss::SelfSupervised && m_options.data_balancing) {
         m_velocity_floor = std::max(m_options.balancing_floor * mean_input_speed(samples), 1e-12);
     }
     model.loss = to_string(m_options.loss);
     model.description = m_options.describe();
 
+    nn::Adam adam(model.network.parameters("integrator."), {m_options.learning_rate});
     int start_epoch = 0;
     if (!m_options.checkpoint_path.empty() && std::filesystem::exists(m_options.checkpoint_path)) {
         const h5::File f = h5::File::open(m_options.checkpoint_path);
         if (f.attribute_string("/", "options") == m_options.describe()) {
             LatentMlpModel saved = LatentMlpModel::load(f, "integrator.");
-            model.network = std::move(saved.network);
+            const auto src = saved.network.parameters();
+            auto dst = model.network.parameters();
+            for (size_t i = 0; i < dst.size(); ++i) dst[i].value = src[i].value;
+            nn::load_adam_state(f, "integrator.", adam, model.network.parameters("integrator."));
             start_epoch = int(f.attribute_int("/", "epoch"));
             summary.resumed = true;
             log_info("resuming integrator training from %s at epoch %d", m_options.checkpoint_path.c_str(), start_epoch);
@@ -250,7 +283,6 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
         }
     }
 
-    nn::Adam adam(model.network.parameters(), {m_options.learning_rate});
     std::vector<Index> order(static_cast<size_t>(S));
     std::iota(order.begin(), order.end(), 0);
     const Index batch = std::min<Index>(m_options.batch_size, S);
@@ -261,6 +293,7 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     for (; epoch < m_options.epochs; ++epoch) {
         // Seeding per epoch makes a resumed run draw the same batches and noise.
         Rng rng(m_options.seed * 1000003ull + std::uint64_t(epoch));
+        std::iota(order.begin(), order.end(), 0);
         std::shuffle(order.begin(), order.end(), rng.engine());
         epoch_loss = 0.0;
         int batches = 0;
@@ -280,7 +313,7 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
             progress.update(epoch + 1, extra);
         }
         if (!m_options.checkpoint_path.empty() && (epoch + 1) % m_options.checkpoint_every == 0) {
-            save_checkpoint(m_options.checkpoint_path, model, epoch + 1, m_options);
+            save_checkpoint(m_options.checkpoint_path, model, adam, epoch + 1, m_options);
         }
         if (m_options.max_seconds > 0.0 && timer.seconds() > m_options.max_seconds) {
             summary.time_limited = true;

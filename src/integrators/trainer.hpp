@@ -65,6 +65,8 @@ TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data);
 
 /// A mini-batch, after noise was (optionally) added.
 struct IntegratorBatch {
+    std::vector<Index> source;  ///< sample index of each column
+    Index clean = 0;            ///< columns [0, clean) carry unperturbed ground-truth latents
     MatrixXd inputs;  ///< input_dim × B (unstandardised)
     MatrixXd z_prev, z_prev2, z_target;
     MatrixXd targets, targets_prev, targets_prev2;
@@ -99,14 +101,21 @@ public:
     /// Mean |v_{t−1}| over the samples' ground-truth decoded inputs.
     double mean_input_speed(const TrainingSamples& samples);
 
+    /// Decode the samples' ground-truth input latents once (x_{t−1}, x_{t−2} of the clean
+    /// columns of every batch): the decoder is frozen, so they never change.
+    void cache_decoded_inputs(const TrainingSamples& samples);
+
 private:
     double evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient);
+    /// Decoded x_{t−1} (which = 1) or x_{t−2} (which = 2) of the batch columns.
+    MatrixXd decoded_inputs(const IntegratorBatch& batch, int which);
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
     IntegratorTrainOptions m_options;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
     double m_velocity_floor = 1e-6;
+    MatrixXd m_decoded_prev, m_decoded_prev2;  ///< 3N × S cache (empty: decode every batch)
 };
 
 /// The paper's Table 2 integrator widths per scene (cloth 32×2, hair 512×3 / 256×3,

@@ -478,10 +478,14 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
 
     // ---- PCA initialisation (deterministic; a resumed run overwrites it from the checkpoint)
     const double explained = ae.initialize_pca(train_features);
-    log_info("autoencoder: %ld features, latent %ld, pca %ld (%.6f of the variance), %ld train / %ld validation "
-             "frames%s",
-             long(ae.num_features()), long(ae.latent_dim()), long(ae.options().pca_dim), explained, long(S),
-             long(val_idx.size()), has_validation ? "" : " (no validation split: validating on the training frames)");
+    char pca_text[96];
+    if (ae.options().pca_dim > 0)
+        std::snprintf(pca_text, sizeof pca_text, "pca %ld (%.6f of the variance)", long(ae.options().pca_dim), explained);
+    else
+        std::snprintf(pca_text, sizeof pca_text, "no PCA layers");
+    log_info("autoencoder: %ld features, latent %ld, %s, %ld train / %ld validation frames%s", long(ae.num_features()),
+             long(ae.latent_dim()), pca_text, long(S), long(val_idx.size()),
+             has_validation ? "" : " (no validation split: validating on the training frames)");
 
     std::vector<nn::ParameterRef> params = ae.encoder().parameters("encoder.");
     for (auto& p : ae.decoder().parameters("decoder.")) params.push_back(p);

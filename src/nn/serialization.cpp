@@ -110,4 +110,36 @@ LoadedNetwork load_network(const std::string& path, const std::string& prefix)
     return load_network(file, prefix);
 }
 
+void save_adam_state(h5::File& file, const std::string& prefix, const Adam& adam,
+                     const std::vector<ParameterRef>& params)
+{
+    const AdamState& s = adam.state();
+    for (size_t i = 0; i < params.size() && i < s.m.size(); ++i) {
+        file.write(prefix + "adam/m/" + params[i].name, s.m[i]);
+        file.write(prefix + "adam/v/" + params[i].name, s.v[i]);
+    }
+    file.set_attribute("/", prefix + "adam_step", (long long)s.step);
+}
+
+void load_adam_state(const h5::File& file, const std::string& prefix, Adam& adam,
+                     const std::vector<ParameterRef>& params)
+{
+    AdamState s;
+    s.step = file.attribute_int("/", prefix + "adam_step");
+    if (s.step > 0) {
+        for (const ParameterRef& p : params) {
+            s.m.push_back(file.read_matrix(prefix + "adam/m/" + p.name));
+            s.v.push_back(file.read_matrix(prefix + "adam/v/" + p.name));
+            if (s.m.back().rows() != p.value.rows() || s.m.back().cols() != p.value.cols()) {
+                throw IoError("'" + file.path() + "': optimiser state for '" + p.name + "' has the wrong shape");
+            }
+        }
+    }
+    try {
+        adam.set_state(std::move(s));
+    } catch (const std::invalid_argument& e) {
+        throw IoError("'" + file.path() + "': " + e.what());
+    }
+}
+
 } // namespace lb::nn

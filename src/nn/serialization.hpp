@@ -14,6 +14,7 @@
 #include <string>
 
 #include "io/hdf5.hpp"
+#include "nn/adam.hpp"
 #include "nn/sequential.hpp"
 #include "nn/standardizer.hpp"
 
@@ -37,5 +38,13 @@ LoadedNetwork load_network(const h5::File& file, const std::string& prefix);
 void save_network(const std::string& path, const std::string& prefix, Sequential& net,
                   const Standardizer* standardizer = nullptr);
 LoadedNetwork load_network(const std::string& path, const std::string& prefix);
+
+/// Optimiser state for checkpoints: datasets `<prefix>adam/m/<param>`, `<prefix>adam/v/<param>`
+/// (one per parameter, in the order of `params`) and the attribute `<prefix>adam_step` on "/".
+void save_adam_state(h5::File& file, const std::string& prefix, const Adam& adam,
+                     const std::vector<ParameterRef>& params);
+/// Restore what save_adam_state wrote into `adam`; IoError if shapes or names differ.
+void load_adam_state(const h5::File& file, const std::string& prefix, Adam& adam,
+                     const std::vector<ParameterRef>& params);
 
 } // namespace lb::nn

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <numeric>
 
 #include "integrators/integrator_fixture.hpp"
@@ -156,6 +157,50 @@ TEST(SelfSupervisedLoss, DecreasesOnATinyScene)
     IntegratorTrainer longer(*p.model, *p.ae, o);
     const double loss_after_60 = longer.train(net2, p.samples).final_loss;
     EXPECT_LT(loss_after_60, loss_after_1) << "60 epochs: " << loss_after_60 << ", 1 epoch: " << loss_after_1;
+}
+
+} // namespace
+} // namespace lb
+
+namespace lb {
+namespace {
+
+MatrixXd flat_weights(LatentMlpModel& m)
+{
+    std::vector<double> w;
+    for (auto& p : m.network.parameters()) w.insert(w.end(), p.value.data(), p.value.data() + p.value.size());
+    return Eigen::Map<MatrixXd>(w.data(), Index(w.size()), 1);
+}
+
+// Training 2N epochs straight and N epochs + a resume from the checkpoint for N
+// more give the same weights (network, optimiser state and batches restored).
+TEST(IntegratorCheckpoint, ResumeReproducesUninterruptedTraining)
+{
+    testing::TinyProblem p;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/integrator_resume";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    IntegratorTrainOptions o;
+    o.hidden = {16};
+    o.batch_size = 8;
+    o.learning_rate = 1e-3;
+    o.progress = false;
+    o.epochs = 6;
+    LatentMlpModel straight = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    IntegratorTrainer(*p.model, *p.ae, o).train(straight, p.samples);
+
+    o.checkpoint_path = dir + "/ckpt.h5";
+    o.checkpoint_every = 3;
+    o.epochs = 3;
+    LatentMlpModel first = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    IntegratorTrainer(*p.model, *p.ae, o).train(first, p.samples);
+    ASSERT_TRUE(std::filesystem::exists(o.checkpoint_path));
+    o.epochs = 6;
+    LatentMlpModel resumed = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
+    const IntegratorTrainSummary s = IntegratorTrainer(*p.model, *p.ae, o).train(resumed, p.samples);
+    EXPECT_TRUE(s.resumed);
+    EXPECT_EQ(s.epochs_run, 6);
+    EXPECT_EQ(flat_weights(resumed), flat_weights(straight));
 }
 
 } // namespace
