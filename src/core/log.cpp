@@ -6,17 +6,33 @@
 namespace lb {
 namespace {
 LogLevel g_level = LogLevel::Info;
+std::FILE* g_file = nullptr;
 
 void vlog(const char* prefix, const char* format, va_list args)
 {
+    va_list copy;
+    va_copy(copy, args);
     std::fprintf(stderr, "[latentbench]%s ", prefix);
     std::vfprintf(stderr, format, args);
     std::fputc('\n', stderr);
     std::fflush(stderr);
+    if (g_file) {
+        std::fprintf(g_file, "[latentbench]%s ", prefix);
+        std::vfprintf(g_file, format, copy);
+        std::fputc('\n', g_file);
+        std::fflush(g_file);
+    }
+    va_end(copy);
 }
 } // namespace
 
 void set_log_level(LogLevel level) { g_level = level; }
+
+void set_log_file(const std::string& path)
+{
+    if (g_file) std::fclose(g_file);
+    g_file = path.empty() ? nullptr : std::fopen(path.c_str(), "a");
+}
 LogLevel log_level() { return g_level; }
 
 void log_info(const char* format, ...)

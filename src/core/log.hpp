@@ -8,6 +8,8 @@ namespace lb {
 enum class LogLevel { Quiet = 0, Info = 1, Debug = 2 };
 
 void set_log_level(LogLevel level);
+/// Also append every message (any level that is printed) to this file; "" stops.
+void set_log_file(const std::string& path);
 LogLevel log_level();
 
 /// printf-style message to stderr, prefixed with "[latentbench]".

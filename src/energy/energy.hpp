@@ -7,6 +7,9 @@
 // gradient, Hessian with fixed-size Eigen types) by deriving from
 // ElementEnergy<K>; summation, gradient scatter and PSD projection live here,
 // and sparse assembly lives in energy/hessian_assembler.hpp, written once.
+// An energy whose element Hessian has a known eigenstructure may override the
+// projection hook (ElementEnergy::local_projected_hessian) with something cheaper
+// than the generic 3K×3K eigenvalue clamp (TetStVK does).
 //
 // Thread safety: all const member functions may be called concurrently.
 #include <memory>
@@ -89,12 +92,12 @@ public:
     }
     void element_hessian(Index e, const VectorXd& x, bool project, double* H) const final
     {
-        ElementMatrix h = local_hessian(e, gather(e, x));
+        const ElementVector xe = gather(e, x);
         Eigen::Map<ElementMatrix> out(H);
         if (project) {
-            out = project_psd(h);
+            out = local_projected_hessian(e, xe);
         } else {
-            out = h;
+            out = local_hessian(e, xe);
         }
     }
 
@@ -102,6 +105,15 @@ protected:
     virtual double local_value(Index e, const ElementVector& xe) const = 0;
     virtual ElementVector local_gradient(Index e, const ElementVector& xe) const = 0;
     virtual ElementMatrix local_hessian(Index e, const ElementVector& xe) const = 0;
+    /// A positive semi-definite stand-in for local_hessian, used by Newton's projected
+    /// fallback. Contract: symmetric, PSD up to round-off, and equal to local_hessian
+    /// whenever that is already PSD. The default clamps the eigenvalues of the 3K×3K
+    /// element Hessian (its nearest PSD matrix in the Frobenius norm); an override may
+    /// return a different PSD matrix if it is much cheaper (see TetStVK).
+    virtual ElementMatrix local_projected_hessian(Index e, const ElementVector& xe) const
+    {
+        return project_psd(local_hessian(e, xe));
+    }
 
 private:
     Elements m_elements;

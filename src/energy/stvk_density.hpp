@@ -13,7 +13,13 @@
 // Linear element with K = D + 1 vertices: F = Σ_a x_a b_aᵀ, where b_a (a = 1..D) is
 // row a−1 of Dm⁻¹ and b_0 = −Σ_{a≥1} b_a, Dm = [X_1 − X_0, …, X_D − X_0] in a
 // D-dimensional rest frame. The element energy is E_e = V ψ(F) (V the rest measure).
+//
+// For D = 3 the file also gives the analytic eigensystem of ∂P/∂F and, from it, a
+// cheap PSD projection of the element Hessian (see "Analytic eigensystem" below).
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <cmath>
 
 namespace lb {
 
@@ -152,6 +158,194 @@ Eigen::Matrix<double, 3 * K, 3 * K> stvk_element_hessian(const DeformationGradie
             block.diagonal().array() += BSB(a, b);
             H.template block<3, 3>(3 * a, 3 * b) = block;
             if (a != b) H.template block<3, 3>(3 * b, 3 * a) = block.transpose();
+        }
+    }
+    return H;
+}
+
+// ---- Analytic eigensystem of ∂P/∂F (D = 3) and the PSD-projected element Hessian ----
+//
+// ψ is isotropic (a function of the invariants of FᵀF), so with the SVD F = U Σ Vᵀ
+// (U, V orthogonal, Σ = diag(σ)) ψ(F) = ψ(Σ + Uᵀ dF V) to second order in the rotated
+// frame, and ∂P/∂F is ∂P/∂F at the diagonal Σ conjugated by U ⊗ V (Teran et al. 2005;
+// Smith et al. 2019, "Analytic eigensystems for isotropic distortion energies").
+// Inserting F = Σ, S = diag(s), s_i = 2μ g_i + λ Σ_k g_k, g_i = (σ_i² − 1)/2, into the
+// four terms of ∂P/∂F above (entry (ij, mn)):
+//   * the three diagonal entries (F̂_00, F̂_11, F̂_22) couple only among themselves, through
+//       A_im = δ_im (s_i + 2μ σ_i²) + λ σ_i σ_m = δ_im (3μ σ_i² + c) + λ σ_i σ_m
+//     (= ∂²ψ̂/∂σ_i∂σ_m); its eigenvectors e give the "scaling" modes U diag(e) Vᵀ;
+//   * each off-diagonal pair (F̂_ij, F̂_ji), i ≠ j, is a 2×2 block
+//       [ μ(σ_i² + σ_j²) + c   μ σ_i σ_j          ]        c = λ Σ_k g_k − μ
+//       [ μ σ_i σ_j            μ(σ_i² + σ_j²) + c ],
+//     (δ_im S_nj gives s_j = μσ_j² + c, μ δ_jn (FFᵀ)_im gives μσ_i², μ F_in F_mj the
+//     off-diagonal), with eigenpairs
+//       flip   μ(σ_i² + σ_iσ_j + σ_j²) + c   on U (e_i e_jᵀ + e_j e_iᵀ) Vᵀ / √2,
+//       twist  μ(σ_i² − σ_iσ_j + σ_j²) + c   on U (e_i e_jᵀ − e_j e_iᵀ) Vᵀ / √2.
+// No formula divides by σ or by σ_i − σ_j, so repeated and zero singular values need no
+// special case, and the identities hold for any orthogonal U, V (inverted elements too).
+// At rest (σ = 1) the twists are 0 (rotations) and the flips 2μ; under compression the
+// twists turn negative first, which is what makes StVK's Hessian indefinite.
+
+namespace detail {
+
+/// Principal axes (i, j) of flip/twist pair k: (1, 2), (2, 0), (0, 1).
+inline int pair_first(int k) { return (k + 1) % 3; }
+inline int pair_second(int k) { return (k + 2) % 3; }
+
+/// c = λ Σ_k g_k − μ, the shift shared by A's diagonal and the pair eigenvalues.
+inline double stvk_principal_shift(const Eigen::Vector3d& sigma, const LameParameters& lame)
+{
+    return lame.lambda * 0.5 * (sigma.squaredNorm() - 3.0) - lame.mu;
+}
+
+} // namespace detail
+
+/// The 3×3 block A = ∂²ψ̂/∂σ² on the diagonal of the rotated F̂ (see above).
+inline Eigen::Matrix3d stvk_scaling_block(const Eigen::Vector3d& sigma, const LameParameters& lame)
+{
+    Eigen::Matrix3d A = lame.lambda * sigma * sigma.transpose();
+    A.diagonal() += 3.0 * lame.mu * sigma.cwiseAbs2() + Eigen::Vector3d::Constant(detail::stvk_principal_shift(sigma, lame));
+    return A;
+}
+
+/// Flip (sign = +1) or twist (sign = −1) eigenvalues μ(σ_i² ± σ_iσ_j + σ_j²) + c, entry k
+/// for the pair (i, j) = ((k+1) mod 3, (k+2) mod 3).
+inline Eigen::Vector3d stvk_pair_values(const Eigen::Vector3d& sigma, const LameParameters& lame, double sign)
+{
+    const double c = detail::stvk_principal_shift(sigma, lame);
+    Eigen::Vector3d values;
+    for (int k = 0; k < 3; ++k) {
+        const double si = sigma[detail::pair_first(k)], sj = sigma[detail::pair_second(k)];
+        values[k] = lame.mu * (si * si + sign * si * sj + sj * sj) + c;
+    }
+    return values;
+}
+
+/// The nine eigenpairs of the 3D StVK ∂P/∂F:
+///   ∂P/∂F = Σ_k λ_k vec(Q_k) vec(Q_k)ᵀ,   Q_k = U Q̂_k Vᵀ,   ⟨Q_k, Q_l⟩_F = δ_kl.
+/// Modes k = 0..2 are the scaling modes, 3..5 the flips and 6..8 the twists of pairs 0..2.
+struct StvkStressEigensystem {
+    static constexpr int kModes = 9;
+    Eigen::Matrix3d U;               ///< F = U diag(sigma) Vᵀ
+    Eigen::Matrix3d V;
+    Eigen::Vector3d sigma;           ///< singular values, ≥ 0
+    Eigen::Vector3d scaling_values;  ///< eigenvalues of stvk_scaling_block
+    Eigen::Matrix3d scaling_vectors; ///< their unit eigenvectors (columns)
+    Eigen::Vector3d flip_values;     ///< stvk_pair_values(sigma, lame, +1)
+    Eigen::Vector3d twist_values;    ///< stvk_pair_values(sigma, lame, −1)
+
+    double value(int k) const
+    {
+        return k < 3 ? scaling_values[k] : k < 6 ? flip_values[k - 3] : twist_values[k - 6];
+    }
+    /// Q̂_k, the mode in the principal frame (3×3, unit Frobenius norm).
+    Eigen::Matrix3d principal_mode(int k) const
+    {
+        if (k < 3) return Eigen::Matrix3d(scaling_vectors.col(k).asDiagonal());
+        const int pair = k < 6 ? k - 3 : k - 6;
+        const int i = detail::pair_first(pair), j = detail::pair_second(pair);
+        Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
+        Q(i, j) = std::sqrt(0.5);
+        Q(j, i) = k < 6 ? std::sqrt(0.5) : -std::sqrt(0.5);
+        return Q;
+    }
+    /// Q_k = U Q̂_k Vᵀ (3×3, unit Frobenius norm).
+    Eigen::Matrix3d mode(int k) const { return U * principal_mode(k) * V.transpose(); }
+};
+
+/// Analytic eigensystem of ∂P/∂F (one 3×3 SVD and one 3×3 symmetric eigensolve).
+inline StvkStressEigensystem stvk_stress_eigensystem(const Eigen::Matrix3d& F, const LameParameters& lame)
+{
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    StvkStressEigensystem es;
+    es.U = svd.matrixU();
+    es.V = svd.matrixV();
+    es.sigma = svd.singularValues();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> scaling(stvk_scaling_block(es.sigma, lame));
+    es.scaling_values = scaling.eigenvalues();
+    es.scaling_vectors = scaling.eigenvectors();
+    es.flip_values = stvk_pair_values(es.sigma, lame, +1.0);
+    es.twist_values = stvk_pair_values(es.sigma, lame, -1.0);
+    return es;
+}
+
+/// (∂P/∂F)₊ = Σ_k max(λ_k, 0) vec(Q_k) vec(Q_k)ᵀ (9×9, same layout as stvk_dPdF): the
+/// nearest PSD matrix to ∂P/∂F in the Frobenius norm, from the analytic eigensystem.
+inline Eigen::Matrix<double, 9, 9> stvk_projected_dPdF(const Eigen::Matrix3d& F, const LameParameters& lame)
+{
+    const StvkStressEigensystem es = stvk_stress_eigensystem(F, lame);
+    Eigen::Matrix<double, 9, 9> dPdF = Eigen::Matrix<double, 9, 9>::Zero();
+    for (int k = 0; k < StvkStressEigensystem::kModes; ++k) {
+        if (es.value(k) <= 0.0) continue;
+        const Eigen::Matrix3d Q = es.mode(k);
+        const Eigen::Map<const Eigen::Matrix<double, 9, 1>> q(Q.data());
+        dPdF.noalias() += es.value(k) * q * q.transpose();
+    }
+    return dPdF;
+}
+
+/// PSD-projected element Hessian (3K×3K) of E_e = V ψ(F(x_e)) for a linear element in 3D
+/// (F = Σ_a x_a b_aᵀ, B the K×3 rows b_a):
+///   H₊ = V Jᵀ (∂P/∂F)₊ J,   J = ∂vec(F)/∂x_e (9×3K),
+/// with (∂P/∂F)₊ the analytic clamp above. Properties:
+///   * symmetric PSD (a congruence of a PSD matrix);
+///   * equal to stvk_element_hessian when ∂P/∂F is PSD, which (J having full row rank 9
+///     for a non-degenerate element) is exactly when the element Hessian is PSD;
+///   * NOT the nearest PSD matrix to the element Hessian in the Frobenius norm (what
+///     project_psd returns): clamping the 9×9 ∂P/∂F and clamping the 3K×3K Jᵀ(∂P/∂F)J
+///     differ unless JJᵀ ∝ I. It is still a valid PSD model of the energy for Newton,
+///     and costs one 3×3 SVD instead of a 3K×3K eigendecomposition (≈ 20× less for tets).
+template <int K>
+Eigen::Matrix<double, 3 * K, 3 * K> stvk_element_projected_hessian(const Eigen::Matrix3d& F,
+                                                                   const Eigen::Matrix<double, K, 3>& B,
+                                                                   double measure, const LameParameters& lame)
+{
+    using ElementVector = Eigen::Matrix<double, 3 * K, 1>;
+    using ModeGradient = Eigen::Matrix<double, 3, K>;
+    Eigen::Matrix<double, 3 * K, 3 * K> H = stvk_element_hessian<K, 3>(F, B, measure, lame);
+
+    // Shortcut without an SVD: d²ψ[dF, dF] = S : (dFᵀdF) + 2μ ||sym(FᵀdF)||² + λ (tr FᵀdF)²,
+    // so with λ ≥ 0 a positive definite S (Sylvester's leading minors) makes ∂P/∂F PSD.
+    const Eigen::Matrix3d S = stvk_second_piola<3>(F, lame);
+    if (lame.lambda >= 0.0 && S(0, 0) > 0.0 && S(0, 0) * S(1, 1) - S(0, 1) * S(0, 1) > 0.0 &&
+        S.determinant() > 0.0) {
+        return H;
+    }
+
+    // H = V Σ_k λ_k w_k w_kᵀ with w_k = Jᵀ vec(Q_k) = vec(Q_k Bᵀ) (node a's block is Q_k b_a),
+    // so H₊ = H − V Σ_{λ_k < 0} λ_k w_k w_kᵀ touches only the (few) negative modes. In the
+    // principal frame Q_k Bᵀ = U Q̂_k (B V)ᵀ: outer products of columns of U and of B V.
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d& U = svd.matrixU();
+    const Eigen::Vector3d& sigma = svd.singularValues();
+    const Eigen::Matrix<double, K, 3> BV = B * svd.matrixV();
+    auto remove_mode = [&](double value, const ModeGradient& QBt) {
+        const Eigen::Map<const ElementVector> w(QBt.data());
+        H.noalias() -= (measure * value) * w * w.transpose();
+    };
+
+    const double half_sqrt2 = std::sqrt(0.5);
+    const Eigen::Vector3d flip = stvk_pair_values(sigma, lame, +1.0);
+    const Eigen::Vector3d twist = stvk_pair_values(sigma, lame, -1.0);
+    for (int k = 0; k < 3; ++k) {
+        const int i = detail::pair_first(k), j = detail::pair_second(k);
+        if (twist[k] < 0.0) {
+            remove_mode(twist[k], half_sqrt2 * (U.col(i) * BV.col(j).transpose() - U.col(j) * BV.col(i).transpose()));
+        }
+        if (flip[k] < 0.0) {
+            remove_mode(flip[k], half_sqrt2 * (U.col(i) * BV.col(j).transpose() + U.col(j) * BV.col(i).transpose()));
+        }
+    }
+
+    // A = diag(d) + λ σσᵀ is PSD when d ≥ 0 and λ ≥ 0; otherwise decompose it.
+    const Eigen::Matrix3d A = stvk_scaling_block(sigma, lame);
+    if (!(lame.lambda >= 0.0 && A.diagonal().minCoeff() >= 0.0)) {
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> scaling(A);
+        for (int k = 0; k < 3; ++k) {
+            if (scaling.eigenvalues()[k] < 0.0) {
+                remove_mode(scaling.eigenvalues()[k],
+                            U * scaling.eigenvectors().col(k).asDiagonal() * BV.transpose());
+            }
         }
     }
     return H;

@@ -61,4 +61,11 @@ TetStVK::ElementMatrix TetStVK::local_hessian(Index t, const ElementVector& xe) 
                                       m_volumes[size_t(t)], m_lame);
 }
 
+TetStVK::ElementMatrix TetStVK::local_projected_hessian(Index t, const ElementVector& xe) const
+{
+    // V Jᵀ (∂P/∂F)₊ J from the analytic eigensystem of ∂P/∂F: see stvk_element_projected_hessian.
+    return stvk_element_projected_hessian<4>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
+                                             m_volumes[size_t(t)], m_lame);
+}
+
 } // namespace lb

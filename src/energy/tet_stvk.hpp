@@ -9,6 +9,12 @@
 //   μ = E / (2(1+ν)),  λ = E ν / ((1+ν)(1−2ν)).
 // Dm⁻¹ (as the 4×3 shape-gradient matrix B) and V_t are precomputed; this is the hot kernel
 // of the solid scenes, so the element Hessian is formed blockwise from the structure of ∂P/∂F.
+//
+// PSD projection (Newton's fallback) clamps the analytic eigensystem of the 9×9 ∂P/∂F
+// (one 3×3 SVD; stvk_element_projected_hessian) instead of eigendecomposing the 12×12
+// element Hessian: H₊ = V Jᵀ (∂P/∂F)₊ J, J = ∂vec(F)/∂x_e. The result is PSD and equals the
+// exact Hessian whenever that is PSD, but it is not the nearest PSD matrix to the element
+// Hessian in the Frobenius norm (which the generic ElementEnergy projection would give).
 #include <vector>
 
 #include "energy/energy.hpp"
@@ -42,6 +48,7 @@ protected:
     double local_value(Index t, const ElementVector& xe) const override;
     ElementVector local_gradient(Index t, const ElementVector& xe) const override;
     ElementMatrix local_hessian(Index t, const ElementVector& xe) const override;
+    ElementMatrix local_projected_hessian(Index t, const ElementVector& xe) const override;
 
 private:
     LameParameters m_lame;

@@ -331,7 +331,7 @@ TEST(PlotScripts, PlotRolloutsRejectsMissingAndCorruptFiles)
     const std::string dir = lb::testing::fresh_dir("plot_rollouts_bad");
     const std::string script = std::string(LB_SOURCE_DIR) + "/scripts/plot_rollouts.py";
     lb::testing::write_file(dir + "/corrupt.h5", "not an HDF5 file");
-    for (const std::string input : {dir + "/missing.h5", dir + "/corrupt.h5"}) {
+    for (const std::string& input : {dir + "/missing.h5", dir + "/corrupt.h5"}) {
         const int code = run_shell(std::string(kPython) + " " + script + " " + input + " -o " + dir +
                                    "/figures > /dev/null 2> " + dir + "/stderr.txt");
         EXPECT_EQ(code, 1) << input;
