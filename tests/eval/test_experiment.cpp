@@ -1,0 +1,116 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "eval/experiment.hpp"
+
+namespace lb {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string write_experiment(const std::string& name, const std::string& text)
+{
+    const fs::path dir = fs::path(LB_TEST_TMP_DIR) / ("experiment_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "suite.toml") << text;
+    return (dir / "suite.toml").string();
+}
+
+const char* kTiny = R"(
+name = "tiny"
+[autoencoder]
+hidden = [16]
+pca = 8
+epochs = 20
+batch = 16
+learning_rate = 1.0e-3
+[training]
+epochs = 5
+hidden = [16]
+learning_rate = 1.0e-3
+[[integrators]]
+name = "ours"
+[[integrators]]
+name = "sup"
+loss = "supervised_l2"
+[[scenes]]
+scene = "experiments/scenes/cantilever.toml"
+variant = "small"
+[evaluation]
+frames = 50
+[outputs]
+plots = false
+[[ablations]]
+name = "supervision"
+methods = ["ours", "sup"]
+)";
+
+TEST(Experiment, EveryShippedSuiteIsValid)
+{
+    int count = 0;
+    for (const auto& entry : fs::directory_iterator(fs::path(LB_SOURCE_DIR) / "experiments")) {
+        if (entry.path().extension() != ".toml") continue;
+        const ExperimentConfig ex = load_experiment(entry.path().string());
+        EXPECT_FALSE(ex.scenes.empty()) << entry.path();
+        EXPECT_FALSE(ex.scenes.front().integrators.empty()) << entry.path();
+        ++count;
+    }
+    EXPECT_GE(count, 8);
+}
+
+TEST(Experiment, RejectsBadKeysByName)
+{
+    std::string text = kTiny;
+    text.replace(text.find("epochs = 5"), 10, "epoch = 5");
+    try {
+        load_experiment(write_experiment("bad_key", text));
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("training.epoch"), std::string::npos) << e.what();
+    }
+    text = kTiny;
+    text.replace(text.find("\"ours\", \"sup\""), 13, "\"ours\", \"nope\"");
+    try {
+        load_experiment(write_experiment("bad_ablation", text));
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
+{
+    set_log_level(LogLevel::Quiet);
+    const std::string path = write_experiment("cache", kTiny);
+    const ExperimentConfig ex = load_experiment(path);
+    RunOptions options;
+    options.output_dir = fs::path(path).parent_path().string() + "/run";
+    const RunResult first = run_experiment(ex, options);
+    // simulate, autoencoder, 2 integrators, 3 rollouts (2 + full space)
+    EXPECT_EQ(first.stages_run, 7);
+    EXPECT_EQ(first.stages_cached, 0);
+    EXPECT_TRUE(fs::exists(options.output_dir + "/tables/methods_cantilever_small.md"));
+    EXPECT_TRUE(fs::exists(options.output_dir + "/tables/ablation_supervision_cantilever_small.tex"));
+    EXPECT_TRUE(fs::exists(options.output_dir + "/tables/table1_timings.csv"));
+    EXPECT_TRUE(fs::exists(options.output_dir + "/run.log"));
+
+    const RunResult second = run_experiment(ex, options);
+    EXPECT_EQ(second.stages_run, 0);
+    EXPECT_EQ(second.stages_cached, 7);
+
+    options.force = {"rollouts"};
+    const RunResult forced = run_experiment(ex, options);
+    EXPECT_EQ(forced.stages_run, 3);
+    EXPECT_EQ(forced.stages_cached, 4);
+
+    options.force = {"everything"};
+    EXPECT_THROW(run_experiment(ex, options), ConfigError);
+}
+
+} // namespace
+} // namespace lb
