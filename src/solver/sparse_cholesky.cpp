@@ -15,6 +15,9 @@ SparseCholesky::SparseCholesky() : m_impl(std::make_unique<Impl>())
     // LLᵀ, supernodal or simplicial as CHOLMOD's flop-count heuristic decides
     // (supernodal for every scene we ship; simplicial for very sparse factors).
     m_impl->llt.setMode(Eigen::CholmodAuto);
+    // Failures are reported through FactorStatus; CHOLMOD's own stderr warnings
+    // ("matrix not positive definite") would only repeat them.
+    m_impl->llt.cholmod().print = 0;
 }
 SparseCholesky::~SparseCholesky() = default;
 
