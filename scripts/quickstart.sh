@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# The default experiment, run by `scripts/run quickstart` after the build.
-# Until the experiment pipeline lands (issue 5) it simulates the small cloth scene.
+# The default experiment, run by `scripts/run quickstart` after the build:
+# experiments/quickstart.toml (small rods, cloth and cantilever; the paper's method, its
+# ablations, the supervised baseline and the full-space reference) into runs/quickstart/.
+# A second run reuses every finished stage. Extra arguments go to `latentbench run`
+# (e.g. --force rollouts).
 set -euo pipefail
 build_dir="${1:-build}"
+shift || true
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-out="runs/quickstart"
-mkdir -p "$out"
-"$build_dir/latentbench" simulate experiments/scenes/cloth.toml --variant small -o "$out/cloth_small.h5"
-"$build_dir/latentbench" info "$out/cloth_small.h5"
-echo "quickstart data: $root/$out/cloth_small.h5"
+"$build_dir/latentbench" run experiments/quickstart.toml -o runs/quickstart "$@"
+echo
+echo "quickstart tables (Markdown; CSV and LaTeX beside them): $root/runs/quickstart/tables/"
+echo "quickstart figures (PNG): $root/runs/quickstart/figures/"
