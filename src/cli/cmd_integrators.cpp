@@ -30,18 +30,6 @@ std::vector<Index> parse_widths(const std::string& text, const std::string& opti
     return widths;
 }
 
-/// Sequences evaluated by default: those with frames beyond their training prefix.
-std::vector<size_t> test_sequences(const Dataset& data, const std::string& which)
-{
-    std::vector<size_t> out;
-    for (size_t k = 0; k < data.sequences.size(); ++k) {
-        const auto& s = data.sequences[k];
-        if (which == "all" || (which == "test" && s.train_frames < s.num_frames()) || which == s.name) out.push_back(k);
-    }
-    if (out.empty()) throw ConfigError("no sequence matches '" + which + "' (use test, all or a sequence name)");
-    return out;
-}
-
 } // namespace
 
 void register_train_integrator(CLI::App& app)
@@ -154,7 +142,7 @@ void register_rollout(CLI::App& app)
         options.max_frames = a->frames;
         options.keep_positions = !a->no_positions;
         options.progress = log_level() >= LogLevel::Info;
-        for (size_t k : test_sequences(data, a->sequences)) {
+        for (size_t k : select_sequences(data, a->sequences)) {
             results.push_back(rollout(integrator, model, data.sequences[k], options));
         }
         save_rollouts(results, a->output, data.scene_toml);
@@ -172,23 +160,7 @@ void register_evaluate(CLI::App& app)
     cmd->callback([files] {
         print_summary_header();
         for (const auto& path : *files) {
-            const h5::File f = h5::File::open(path);
-            if (!f.has_attribute("/", "num_rollouts")) throw IoError("'" + path + "' is not a rollout file");
-            const long long n = f.attribute_int("/", "num_rollouts");
-            for (long long k = 0; k < n; ++k) {
-                const std::string g = "rollouts/" + std::to_string(k);
-                RolloutSummary s;
-                s.frames = int(f.attribute_int(g, "frames"));
-                s.stable_horizon = int(f.attribute_int(g, "stable_horizon"));
-                s.final_rmse = f.attribute_double(g, "final_rmse");
-                s.mean_rmse = f.attribute_double(g, "mean_rmse");
-                s.max_bc_violation = f.attribute_double(g, "max_bc_violation");
-                s.ke_ratio = f.attribute_double(g, "ke_ratio");
-                s.mean_residual = f.attribute_double(g, "mean_residual");
-                s.sted = f.attribute_double(g, "sted");
-                s.total_ms = f.attribute_double(g, "total_ms");
-                print_summary(f.attribute_string(g, "method"), f.attribute_string(g, "sequence"), s);
-            }
+            for (const RolloutRecord& r : load_rollout_summaries(path)) print_summary(r.method, r.sequence, r.summary);
         }
     });
 }

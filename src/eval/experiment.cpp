@@ -461,6 +461,20 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
         r.decoder_layers = widths_text(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
         r.jvp_ms = measure_jvp_ms(*ae);
         const TrainingSamples samples = make_training_samples(*ae, data);
+        // The evaluation protocol: the selected sequences, from their first two frames.
+        std::vector<size_t> evaluated;
+        try {
+            evaluated = select_sequences(data, ex.sequences);
+        } catch (const ConfigError& e) {
+            throw ConfigError(ex.source + ": key 'evaluation.sequences' (" + spec.label + "): " + e.what());
+        }
+        auto roll_out = [&](Integrator& integrator) {
+            RolloutOptions ro;
+            ro.max_frames = ex.rollout_frames;
+            std::vector<RolloutResult> rolls;
+            for (size_t k : evaluated) rolls.push_back(rollout(integrator, model, data.sequences[k], ro));
+            return rolls;
+        };
 
         // integrators and their rollouts
         for (const IntegratorSpec& m : spec.integrators) {
@@ -497,17 +511,7 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
             cache.run("rollouts", spec.label + ": rollout '" + m.name + "'", mr.rollout_file, rkey, [&] {
                 const h5::File f = h5::File::open(file);
                 LatentMlpIntegrator integrator(m.name, ae, LatentMlpModel::load(f, "integrator."));
-                std::vector<RolloutResult> rolls;
-                RolloutOptions ro;
-                ro.max_frames = ex.rollout_frames;
-                for (size_t k = 0; k < data.sequences.size(); ++k) {
-                    const auto& s = data.sequences[k];
-                    if (ex.sequences == "all" || (ex.sequences == "test" && s.train_frames < s.num_frames()) || ex.sequences == s.name) {
-                        rolls.push_back(rollout(integrator, model, s, ro));
-                    }
-                }
-                if (rolls.empty()) throw ConfigError(ex.source + ": key 'evaluation.sequences': no sequence of " + spec.label + " matches '" + ex.sequences + "'");
-                save_rollouts(rolls, mr.rollout_file, ex.toml_text);
+                save_rollouts(roll_out(integrator), mr.rollout_file, ex.toml_text);
             });
             r.methods.push_back(mr);
         }
@@ -518,39 +522,13 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
             const std::string rkey = hash_hex(sim_key + "|full_space|" + ex.sequences + "|" + std::to_string(ex.rollout_frames));
             cache.run("rollouts", spec.label + ": rollout 'full_space'", mr.rollout_file, rkey, [&] {
                 FullSpaceIntegrator integrator(model, scene.newton);
-                std::vector<RolloutResult> rolls;
-                RolloutOptions ro;
-                ro.max_frames = ex.rollout_frames;
-                for (const auto& s : data.sequences) {
-                    if (ex.sequences == "all" || (ex.sequences == "test" && s.train_frames < s.num_frames()) || ex.sequences == s.name) {
-                        rolls.push_back(rollout(integrator, model, s, ro));
-                    }
-                }
-                save_rollouts(rolls, mr.rollout_file, ex.toml_text);
+                save_rollouts(roll_out(integrator), mr.rollout_file, ex.toml_text);
             });
             r.methods.push_back(mr);
         }
         // Summaries back from the rollout files (cached or fresh alike).
         for (MethodResult& mr : r.methods) {
-            const h5::File f = h5::File::open(mr.rollout_file);
-            const long long n = f.attribute_int("/", "num_rollouts");
-            for (long long k = 0; k < n; ++k) {
-                const std::string g = "rollouts/" + std::to_string(k);
-                RolloutSummary s;
-                s.frames = int(f.attribute_int(g, "frames"));
-                s.stable_horizon = int(f.attribute_int(g, "stable_horizon"));
-                s.final_rmse = f.attribute_double(g, "final_rmse");
-                s.mean_rmse = f.attribute_double(g, "mean_rmse");
-                s.max_bc_violation = f.attribute_double(g, "max_bc_violation");
-                s.ke_ratio = f.attribute_double(g, "ke_ratio");
-                s.mean_residual = f.attribute_double(g, "mean_residual");
-                s.m_rms = f.attribute_double(g, "m_rms");
-                s.sted = f.attribute_double(g, "sted");
-                s.integrate_ms = f.attribute_double(g, "integrate_ms");
-                s.decode_ms = f.attribute_double(g, "decode_ms");
-                s.total_ms = f.attribute_double(g, "total_ms");
-                mr.summaries.push_back(s);
-            }
+            for (const RolloutRecord& rec : load_rollout_summaries(mr.rollout_file)) mr.summaries.push_back(rec.summary);
         }
         scenes.push_back(std::move(r));
     }

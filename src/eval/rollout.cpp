@@ -1,5 +1,6 @@
 #include "eval/rollout.hpp"
 
+#include "core/error.hpp"
 #include "core/log.hpp"
 #include "io/hdf5.hpp"
 
@@ -89,6 +90,46 @@ void save_rollouts(const std::vector<RolloutResult>& results, const std::string&
         }
     }
     out.commit();
+}
+
+std::vector<size_t> select_sequences(const Dataset& data, const std::string& which)
+{
+    std::vector<size_t> out;
+    for (size_t k = 0; k < data.sequences.size(); ++k) {
+        const auto& s = data.sequences[k];
+        if (which == "all" || (which == "test" && s.train_frames < s.num_frames()) || which == s.name) out.push_back(k);
+    }
+    if (out.empty()) throw ConfigError("no sequence matches '" + which + "' (use test, all or a sequence name)");
+    return out;
+}
+
+std::vector<RolloutRecord> load_rollout_summaries(const std::string& path)
+{
+    const h5::File f = h5::File::open(path);
+    if (!f.has_attribute("/", "num_rollouts")) throw IoError("'" + path + "' is not a rollout file");
+    std::vector<RolloutRecord> records;
+    const long long n = f.attribute_int("/", "num_rollouts");
+    for (long long k = 0; k < n; ++k) {
+        const std::string g = "rollouts/" + std::to_string(k);
+        RolloutRecord r;
+        r.method = f.attribute_string(g, "method");
+        r.sequence = f.attribute_string(g, "sequence");
+        RolloutSummary& s = r.summary;
+        s.frames = int(f.attribute_int(g, "frames"));
+        s.stable_horizon = int(f.attribute_int(g, "stable_horizon"));
+        s.final_rmse = f.attribute_double(g, "final_rmse");
+        s.mean_rmse = f.attribute_double(g, "mean_rmse");
+        s.max_bc_violation = f.attribute_double(g, "max_bc_violation");
+        s.ke_ratio = f.attribute_double(g, "ke_ratio");
+        s.mean_residual = f.attribute_double(g, "mean_residual");
+        s.m_rms = f.attribute_double(g, "m_rms");
+        s.sted = f.attribute_double(g, "sted");
+        s.integrate_ms = f.attribute_double(g, "integrate_ms");
+        s.decode_ms = f.attribute_double(g, "decode_ms");
+        s.total_ms = f.attribute_double(g, "total_ms");
+        records.push_back(std::move(r));
+    }
+    return records;
 }
 
 } // namespace lb

@@ -31,6 +31,18 @@ RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const S
 /// Boundary state of frame t of a sequence.
 BoundaryState boundary_state(const SequenceData& sequence, Index t);
 
+/// Indices of the sequences to evaluate: "test" (frames beyond their training prefix),
+/// "all", or a sequence name. ConfigError if none matches.
+std::vector<size_t> select_sequences(const Dataset& data, const std::string& which);
+
+/// Method, sequence and summary of every rollout in a file written by save_rollouts.
+struct RolloutRecord {
+    std::string method;
+    std::string sequence;
+    RolloutSummary summary;
+};
+std::vector<RolloutRecord> load_rollout_summaries(const std::string& path);
+
 /// Write rollouts (per-frame metrics, summaries, optionally positions) to HDF5,
 /// atomically; `config_text` (what produced them) is embedded.
 void save_rollouts(const std::vector<RolloutResult>& results, const std::string& path, const std::string& config_text);
