@@ -23,6 +23,9 @@ TEST(Stability, QuickstartSizeProblemsMeetCommittedThresholds)
     const ExperimentConfig ex = load_experiment(root + "/experiments/stability.toml");
     RunOptions options;
     options.output_dir = std::string(LB_TEST_TMP_DIR) + "/stability_run";
+    // Stage keys hash the configuration, not the code: a regression test must retrain
+    // from scratch every time, never reuse an earlier run's stages.
+    std::filesystem::remove_all(options.output_dir);
     const RunResult run = run_experiment(ex, options);
 
     const toml::table thresholds = parse_toml_file(root + "/results/stability_thresholds.toml");
