@@ -14,6 +14,7 @@
 
 #include "core/rng.hpp"
 #include "core/types.hpp"
+#include "mesh/generators.hpp"
 #include "energy/energy.hpp"
 #include "support/finite_difference.hpp"
 
@@ -164,6 +165,30 @@ inline double mean_element_edge(const Energy& energy, const MatrixX3d& rest)
         }
     }
     return count > 0 ? sum / double(count) : 1.0;
+}
+
+/// Small meshes shared by the energy tests (generated, z-up).
+inline
+Mesh small_bundle()
+{
+    RodBundleOptions options;
+    options.num_rods_x = 2;
+    options.num_rods_y = 2;
+    options.vertices_per_rod = 6;
+    options.length = 0.5;
+    options.spacing = 0.1;
+    return make_rod_bundle(options);
+}
+
+inline
+Mesh small_cloth()
+{
+    ClothGridOptions options;
+    options.nx = 5;
+    options.ny = 4;
+    options.width = 0.4;
+    options.height = 0.3;
+    return make_cloth_grid(options);
 }
 
 } // namespace lb::testing

@@ -12,21 +12,12 @@ using testing::check_energy_gradient;
 using testing::check_energy_hessian;
 using testing::check_rigid_invariance;
 using testing::perturbed_state;
+using testing::small_bundle;
 
 constexpr double kYoungs = 1e7;   // Pa
 constexpr double kRadius = 1e-3;  // m
 constexpr double kSegment = 0.1;  // m
 
-Mesh small_bundle()
-{
-    RodBundleOptions options;
-    options.num_rods_x = 2;
-    options.num_rods_y = 2;
-    options.vertices_per_rod = 6;
-    options.length = 0.5;
-    options.spacing = 0.1;
-    return make_rod_bundle(options);
-}
 
 TEST(RodStretching, GradientAndHessianMatchFiniteDifferences)
 {

@@ -15,21 +15,13 @@ using testing::check_energy_gradient;
 using testing::check_energy_hessian;
 using testing::check_rigid_invariance;
 using testing::perturbed_state;
+using testing::small_cloth;
 
 constexpr double kYoungs = 1e5;      // Pa
 constexpr double kPoisson = 0.3;
 constexpr double kThickness = 1e-3;  // m
 constexpr double kCell = 0.1;        // m
 
-Mesh small_cloth()
-{
-    ClothGridOptions options;
-    options.nx = 5;
-    options.ny = 4;
-    options.width = 0.4;
-    options.height = 0.3;
-    return make_cloth_grid(options);
-}
 
 TEST(ShellHingeBending, GradientAndHessianMatchFiniteDifferences)
 {
