@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "support/cli_runner.hpp"
+#include "support/tiny_scene.hpp"
 
 namespace lb {
 namespace {
@@ -14,24 +15,7 @@ using testing::run_cli;
 using testing::write_file;
 namespace fs = std::filesystem;
 
-const char* kScene = R"(
-name = "tiny"
-object = "solid"
-[mesh]
-generator = "tet_beam"
-nx = 2
-ny = 1
-nz = 1
-size = [0.2, 0.1, 0.1]
-[material]
-youngs_modulus = 1e5
-density = 1000.0
-[[dirichlet.region]]
-min = [0.0, 0.0, 0.0]
-max = [0.0, 1.0, 1.0]
-[[sequences]]
-frames = 4
-)";
+const char* const kScene = testing::kTinySceneToml;
 
 struct BadCase {
     std::string name;

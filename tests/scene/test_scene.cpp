@@ -4,30 +4,12 @@
 
 #include "core/error.hpp"
 #include "scene/scene.hpp"
+#include "support/tiny_scene.hpp"
 
 namespace lb {
 namespace {
 
-const char* kMinimal = R"(
-name = "tiny"
-object = "solid"
-[mesh]
-generator = "tet_beam"
-nx = 2
-ny = 1
-nz = 1
-size = [0.2, 0.1, 0.1]
-[material]
-youngs_modulus = 1e5
-density = 1000.0
-[[dirichlet.region]]
-min = [0.0, 0.0, 0.0]
-max = [0.0, 1.0, 1.0]
-[[sequences]]
-frames = 10
-train_frames = 5
-segments = [{ frames = 4, velocity = [1.0, 0.0, 0.0] }, { frames = 5, angular_velocity = [0.0, 0.0, 3.0] }]
-)";
+const char* const kMinimal = testing::kTinySceneToml;
 
 Scene load(const std::string& text) { return load_scene_from_string(text, "test.toml", "."); }
 
