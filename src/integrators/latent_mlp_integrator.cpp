@@ -84,6 +84,8 @@ LatentMlpIntegrator::LatentMlpIntegrator(std::string name, std::shared_ptr<Autoe
                     std::to_string(m_autoencoder->latent_dim()));
     }
     m_input.resize(m_model.input_dim());
+    m_zf.resize(m_model.latent_dim);
+    m_x.resize(m_autoencoder->encoding().num_dofs());
     m_scale = m_model.output_scale.cast<float>();
 }
 
@@ -116,9 +118,9 @@ void LatentMlpIntegrator::integrate_only(const BoundaryState& bc)
 
 void LatentMlpIntegrator::decode_only(const BoundaryState& bc)
 {
-    const Eigen::VectorXf zf = m_z.cast<float>();
-    const auto features = m_decoder_net.evaluate(zf);
-    m_x = m_autoencoder->encoding().to_positions(features.cast<double>(), bc.targets);
+    m_zf = m_z.cast<float>();  // preallocated: no allocation per frame
+    const auto features = m_decoder_net.evaluate(m_zf);
+    m_autoencoder->encoding().to_positions_into(features, bc.targets, m_x);
 }
 
 StepTiming LatentMlpIntegrator::step(const BoundaryState& bc)

@@ -1,3 +1,4 @@
+#include <cassert>
 #include "latent/bc_encoding.hpp"
 
 #include <string>
@@ -91,6 +92,43 @@ MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const
     return F;
 }
 
+template <typename Scalar>
+void BcRelativeEncoding::positions_of_frame(const Scalar* f, const double* targets, double* x) const
+{
+    const Index B = static_cast<Index>(m_bc_indices.size());
+    Eigen::Map<const Eigen::Matrix<Scalar, Eigen::Dynamic, 1>> F(f, m_num_features);
+    Eigen::Map<const VectorXd> T(targets, 3 * B);
+    Eigen::Map<VectorXd> X(x, m_num_dofs);
+    if (m_rod_relative) {
+        // Roots take their targets (written for every Dirichlet vertex, then overwritten on
+        // the non-root ones, which are decoded like any other vertex: root + feature).
+        for (Index b = 0; b < B; ++b) X.segment<3>(3 * Index(m_bc_indices[std::size_t(b)])) = T.segment<3>(3 * b);
+        for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
+            const auto [v, slot] = m_rod_vertices[k];
+            X.segment<3>(3 * Index(v)) = F.template segment<3>(3 * Index(k)).template cast<double>() + T.segment<3>(3 * Index(slot));
+        }
+    } else {
+        Vector3d mean = Vector3d::Zero();
+        for (Index b = 0; b < B; ++b) mean += T.segment<3>(3 * b);
+        mean /= double(B);
+        for (Index i = 0; i < m_num_dofs / 3; ++i) X.segment<3>(3 * i) = F.template segment<3>(3 * i).template cast<double>() + mean;
+    }
+}
+
+void BcRelativeEncoding::to_positions_into(const Eigen::Ref<const VectorXd>& f, const Eigen::Ref<const VectorXd>& targets,
+                                           Eigen::Ref<VectorXd> x) const
+{
+    assert(f.size() == m_num_features && targets.size() == 3 * Index(m_bc_indices.size()) && x.size() == m_num_dofs);
+    positions_of_frame(f.data(), targets.data(), x.data());
+}
+
+void BcRelativeEncoding::to_positions_into(const Eigen::Ref<const Eigen::VectorXf>& f,
+                                           const Eigen::Ref<const VectorXd>& targets, Eigen::Ref<VectorXd> x) const
+{
+    assert(f.size() == m_num_features && targets.size() == 3 * Index(m_bc_indices.size()) && x.size() == m_num_dofs);
+    positions_of_frame(f.data(), targets.data(), x.data());
+}
+
 MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& targets) const
 {
     const Index B = static_cast<Index>(m_bc_indices.size());
@@ -99,27 +137,8 @@ MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& tar
                                     " × S features and " + std::to_string(3 * B) + " × S targets, got " +
                                     std::to_string(F.rows()) + " × " + std::to_string(F.cols()) + " and " +
                                     std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
-    const Index S = F.cols();
-    MatrixXd X(m_num_dofs, S);
-    for (Index s = 0; s < S; ++s) {
-        if (m_rod_relative) {
-            // Roots take their targets (written for every Dirichlet vertex, then overwritten on
-            // the non-root ones, which are decoded like any other vertex: root + feature).
-            for (Index b = 0; b < B; ++b)
-                X.col(s).segment<3>(3 * Index(m_bc_indices[std::size_t(b)])) = targets.col(s).segment<3>(3 * b);
-            for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
-                const auto [v, slot] = m_rod_vertices[k];
-                X.col(s).segment<3>(3 * Index(v)) =
-                    F.col(s).segment<3>(3 * Index(k)) + targets.col(s).segment<3>(3 * Index(slot));
-            }
-        } else {
-            Vector3d mean = Vector3d::Zero();
-            for (Index b = 0; b < B; ++b) mean += targets.col(s).segment<3>(3 * b);
-            mean /= double(B);
-            X.col(s) = F.col(s);
-            for (Index i = 0; i < m_num_dofs / 3; ++i) X.col(s).segment<3>(3 * i) += mean;
-        }
-    }
+    MatrixXd X(m_num_dofs, F.cols());
+    for (Index s = 0; s < F.cols(); ++s) positions_of_frame(F.col(s).data(), targets.col(s).data(), X.col(s).data());
     return X;
 }
 

@@ -33,10 +33,19 @@ public:
     /// @param targets  3B × S Dirichlet targets (xyz interleaved, one column per frame)
     /// @return 3N × S positions
     MatrixXd to_positions(const MatrixXd& F, const MatrixXd& targets) const;
+    /// One frame without allocation (the inference path): x (3N) from features f (F,
+    /// float or double) and the Dirichlet targets (3B).
+    void to_positions_into(const Eigen::Ref<const VectorXd>& f, const Eigen::Ref<const VectorXd>& targets,
+                           Eigen::Ref<VectorXd> x) const;
+    void to_positions_into(const Eigen::Ref<const Eigen::VectorXf>& f, const Eigen::Ref<const VectorXd>& targets,
+                           Eigen::Ref<VectorXd> x) const;
     /// Chain rule through to_positions: 3N × S position gradients → F × S.
     MatrixXd gradient_to_features(const MatrixXd& grad_x) const;
 
 private:
+    template <typename Scalar>
+    void positions_of_frame(const Scalar* f, const double* targets, double* x) const;
+
     /// Mean of the Dirichlet vertices of one 3N position vector.
     Vector3d bc_mean(const Eigen::Ref<const VectorXd>& x) const;
 
