@@ -139,6 +139,19 @@ ExperimentConfig load_experiment(const std::string& path)
         if (m.name.empty() || m.name.find_first_of("/ \t") != std::string::npos) t.fail("name", "must be a non-empty word");
         if (m.name == "full_space") t.fail("name", "'full_space' is reserved for the reference simulator");
         if (!names.insert(m.name).second) t.fail("name", "duplicate integrator name '" + m.name + "'");
+        const std::string method = t.get_string("method", "latent_mlp");
+        if (method == "linear_pca") {
+            // Newton in a linear PCA subspace: no network, no training options.
+            m.kind = MethodKind::LinearPca;
+            m.linear_pca.dim = Index(t.get_int("dim", 0));
+            m.linear_pca.penalty_weight = t.get_double("penalty_weight", m.linear_pca.penalty_weight);
+            if (m.linear_pca.dim < 0) t.fail("dim", "must be positive (or omitted: the scene's latent size)");
+            if (!(m.linear_pca.penalty_weight > 0.0)) t.fail("penalty_weight", "must be positive");
+            t.finish();
+            methods.push_back(m);
+            continue;
+        }
+        if (method != "latent_mlp") t.fail("method", "unknown method '" + method + "' (latent_mlp or linear_pca)");
         m.options = train_defaults;
         m.hidden_given = hidden_default_given;
         m.options.loss = integrator_loss_from_string(t.get_string("loss", "self_supervised"));
@@ -168,7 +181,7 @@ ExperimentConfig load_experiment(const std::string& path)
         for (IntegratorSpec m : methods) {
             // Scene-level [scenes.training] applies under each method's own switches
             // (loss, noise, balancing) and explicit overrides.
-            if (scene_train) {
+            if (scene_train && m.kind == MethodKind::LatentMlp) {
                 const IntegratorSpec own = m;
                 m.options = scene_training;
                 m.options.loss = own.options.loss;
@@ -272,6 +285,8 @@ private:
 
 struct MethodResult {
     std::string name;
+    MethodKind kind = MethodKind::LatentMlp;
+    Index linear_pca_dim = 0;
     std::string rollout_file;
     std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence
     IntegratorTrainOptions options;
@@ -377,9 +392,12 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
         const RolloutSummary s = mean_summary(m.summaries);
-        const bool fs_row = m.name == "full_space";
-        t.add_row({m.name, fs_row ? "—" : to_string(m.options.loss), fs_row ? "—" : (m.options.training_noise ? "on" : "off"),
-                   fs_row ? "—" : (m.options.data_balancing ? "on" : "off"),
+        const bool untrained = m.name == "full_space" || m.kind != MethodKind::LatentMlp;
+        const std::string loss = m.kind == MethodKind::LinearPca ? "— (linear PCA, d = " + std::to_string(m.linear_pca_dim) + ")"
+                                 : untrained                     ? "—"
+                                                                 : to_string(m.options.loss);
+        t.add_row({m.name, loss, untrained ? "—" : (m.options.training_noise ? "on" : "off"),
+                   untrained ? "—" : (m.options.data_balancing ? "on" : "off"),
                    TableCell(std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames), double(s.stable_horizon)),
                    number(s.final_rmse), number(s.mean_rmse), number(s.max_bc_violation), number(s.ke_ratio),
                    number(s.mean_residual), number(s.sted), number(s.integrate_ms), number(s.decode_ms),
@@ -480,6 +498,33 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
         for (const IntegratorSpec& m : spec.integrators) {
             MethodResult mr;
             mr.name = m.name;
+            mr.kind = m.kind;
+            if (m.kind == MethodKind::LinearPca) {
+                LinearPcaOptions lo = m.linear_pca;
+                if (lo.dim == 0) lo.dim = ae->latent_dim();
+                const std::string file = dir + "/integrators/" + m.name + ".h5";
+                std::ostringstream desc;
+                desc << "linear_pca|dim=" << lo.dim << "|w_bc=" << lo.penalty_weight << "|it=" << lo.max_iterations
+                     << "|tol=" << lo.gradient_tolerance << "," << lo.step_tolerance;
+                const std::string key = hash_hex(sim_key + "|" + desc.str());
+                cache.run("integrators", spec.label + ": linear PCA subspace '" + m.name + "' (d = " + std::to_string(lo.dim) + ")",
+                          file, key, [&] { LinearPcaSubspace::fit(data, lo.dim).save(file); });
+                LinearPcaSubspace subspace = LinearPcaSubspace::load(file, data.physics);
+                mr.linear_pca_dim = subspace.pca.dim();
+                mr.rollout_file = dir + "/rollouts/" + m.name + ".h5";
+                const std::string rkey = hash_hex(key + "|rollout|" + ex.sequences + "|" + std::to_string(ex.rollout_frames));
+                cache.run("rollouts", spec.label + ": rollout '" + m.name + "'", mr.rollout_file, rkey, [&] {
+                    LinearPcaIntegrator integrator(m.name, model, std::move(subspace), lo);
+                    save_rollouts(roll_out(integrator), mr.rollout_file, ex.toml_text);
+                    log_info("%s: linear PCA '%s': %.2f reduced Newton iterations per step", spec.label.c_str(),
+                             m.name.c_str(), integrator.mean_iterations());
+                    if (integrator.unconverged_steps() > 0)
+                        log_warn("%s: linear PCA '%s': %d reduced Newton solves stopped before converging", spec.label.c_str(),
+                                 m.name.c_str(), integrator.unconverged_steps());
+                });
+                r.methods.push_back(mr);
+                continue;
+            }
             mr.options = m.options;
             if (!m.hidden_given) mr.options.hidden = default_integrator_hidden(scene.name);
             mr.options.progress = log_level() >= LogLevel::Info;
@@ -565,7 +610,7 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
         for (const SceneResult& r : scenes) {
             const MethodResult* ours = nullptr;
             for (const auto& m : r.methods) {
-                if (m.name != "full_space" && m.options.loss == IntegratorLoss::SelfSupervised) {
+                if (m.kind == MethodKind::LatentMlp && m.name != "full_space" && m.options.loss == IntegratorLoss::SelfSupervised) {
                     ours = &m;
                     break;
                 }

@@ -10,15 +10,22 @@
 #include <string>
 #include <vector>
 
+#include "baselines/linear_pca/linear_pca.hpp"
 #include "integrators/trainer.hpp"
 #include "latent/autoencoder.hpp"
 
 namespace lb {
 
+/// What an [[integrators]] entry builds: the latent MLP of Li et al. (trained with
+/// `options`), or a baseline that needs no network.
+enum class MethodKind { LatentMlp, LinearPca };
+
 struct IntegratorSpec {
     std::string name;  ///< label in tables and file names
-    IntegratorTrainOptions options;
+    MethodKind kind = MethodKind::LatentMlp;
+    IntegratorTrainOptions options;  ///< latent MLP only
     bool hidden_given = false;  ///< else the paper's widths for the scene
+    LinearPcaOptions linear_pca;   ///< linear_pca only; dim 0: the scene's latent size
 };
 
 struct SceneSpec {
