@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
@@ -38,6 +39,9 @@ name = "ours"
 [[integrators]]
 name = "sup"
 loss = "supervised_l2"
+[[integrators]]
+name = "pca"
+method = "linear_pca"
 [[scenes]]
 scene = "experiments/scenes/cantilever.toml"
 variant = "small"
@@ -81,6 +85,23 @@ TEST(Experiment, RejectsBadKeysByName)
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos) << e.what();
     }
+    // A linear PCA entry takes no training keys; an unknown method is named.
+    text = kTiny;
+    text.replace(text.find("method = \"linear_pca\""), 21, "method = \"linear_pca\"\nepochs = 3");
+    try {
+        load_experiment(write_experiment("pca_training_key", text));
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("epochs"), std::string::npos) << e.what();
+    }
+    text = kTiny;
+    text.replace(text.find("method = \"linear_pca\""), 21, "method = \"cubature\"");
+    try {
+        load_experiment(write_experiment("bad_method", text));
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("cubature"), std::string::npos) << e.what();
+    }
 }
 
 TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
@@ -91,22 +112,28 @@ TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
     RunOptions options;
     options.output_dir = fs::path(path).parent_path().string() + "/run";
     const RunResult first = run_experiment(ex, options);
-    // simulate, autoencoder, 2 integrators, 3 rollouts (2 + full space)
-    EXPECT_EQ(first.stages_run, 7);
+    // simulate, autoencoder, 2 integrators + 1 PCA subspace, 4 rollouts (3 + full space)
+    EXPECT_EQ(first.stages_run, 9);
     EXPECT_EQ(first.stages_cached, 0);
     EXPECT_TRUE(fs::exists(options.output_dir + "/tables/methods_cantilever_small.md"));
     EXPECT_TRUE(fs::exists(options.output_dir + "/tables/ablation_supervision_cantilever_small.tex"));
     EXPECT_TRUE(fs::exists(options.output_dir + "/tables/table1_timings.csv"));
     EXPECT_TRUE(fs::exists(options.output_dir + "/run.log"));
+    {
+        std::ifstream in(options.output_dir + "/tables/methods_cantilever_small.md");
+        const std::string table((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        EXPECT_NE(table.find("| pca "), std::string::npos) << table;
+        EXPECT_NE(table.find("linear PCA, d = 4"), std::string::npos) << table;
+    }
 
     const RunResult second = run_experiment(ex, options);
     EXPECT_EQ(second.stages_run, 0);
-    EXPECT_EQ(second.stages_cached, 7);
+    EXPECT_EQ(second.stages_cached, 9);
 
     options.force = {"rollouts"};
     const RunResult forced = run_experiment(ex, options);
-    EXPECT_EQ(forced.stages_run, 3);
-    EXPECT_EQ(forced.stages_cached, 4);
+    EXPECT_EQ(forced.stages_run, 4);
+    EXPECT_EQ(forced.stages_cached, 5);
 
     options.force = {"everything"};
     EXPECT_THROW(run_experiment(ex, options), ConfigError);
