@@ -67,6 +67,12 @@ LinearPcaSubspace LinearPcaSubspace::load(const std::string& path, const Physics
     return s;
 }
 
+bool LinearPcaSubspace::is_subspace_file(const std::string& path)
+{
+    const h5::File f = h5::File::open(path);
+    return f.has_attribute("/", "format") && f.attribute_string("/", "format") == kFormat;
+}
+
 LinearPcaIntegrator::LinearPcaIntegrator(std::string name, const PhysicsModel& model, LinearPcaSubspace subspace,
                                          LinearPcaOptions options)
     : m_name(std::move(name)),

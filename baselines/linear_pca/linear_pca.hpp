@@ -48,6 +48,8 @@ struct LinearPcaSubspace {
     void save(const std::string& path) const;
     /// IoError naming the file if it is not a linear_pca file or F does not match.
     static LinearPcaSubspace load(const std::string& path, const PhysicsSpec& physics);
+    /// True if `path` is an HDF5 file written by save() (false for other HDF5 files).
+    static bool is_subspace_file(const std::string& path);
 };
 
 class LinearPcaIntegrator final : public Integrator {

@@ -3,6 +3,8 @@
 #include <sstream>
 
 #include "cli/commands.hpp"
+
+#include "baselines/linear_pca/linear_pca.hpp"
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "eval/rollout.hpp"
@@ -122,8 +124,10 @@ void register_rollout(CLI::App& app)
     auto a = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("rollout", "Roll out a trained integrator on a dataset's sequences and measure it");
     cmd->add_option("data", a->data, "Dataset HDF5")->required();
-    cmd->add_option("--ae", a->ae, "Autoencoder HDF5")->required();
-    cmd->add_option("--integrator", a->integrator, "Integrator HDF5 from `train-integrator`")->required();
+    cmd->add_option("--ae", a->ae, "Autoencoder HDF5 (latent MLP integrators)");
+    cmd->add_option("--integrator", a->integrator,
+                    "Integrator HDF5 from `train-integrator`, or a subspace from `fit-pca` (linear_pca baseline)")
+        ->required();
     cmd->add_option("-o,--output", a->output, "Output rollout HDF5 (metrics per frame and summaries)")->required();
     cmd->add_option("--name", a->name, "Method label in tables (default: the integrator's loss)");
     cmd->add_option("--sequences", a->sequences, "test (default: sequences with frames beyond training), all, or a name");
@@ -132,23 +136,53 @@ void register_rollout(CLI::App& app)
     cmd->callback([a] {
         const Dataset data = load_dataset(a->data);
         const PhysicsModel model(data.physics);
-        auto ae = std::make_shared<Autoencoder>(Autoencoder::load(a->ae, data.physics));
-        const h5::File f = h5::File::open(a->integrator);
-        LatentMlpModel net = LatentMlpModel::load(f, "integrator.");
-        const std::string name = a->name.empty() ? net.loss : a->name;
-        LatentMlpIntegrator integrator(name, ae, std::move(net));
+        std::unique_ptr<Integrator> integrator;
+        if (LinearPcaSubspace::is_subspace_file(a->integrator)) {
+            integrator = std::make_unique<LinearPcaIntegrator>(a->name.empty() ? "linear_pca" : a->name, model,
+                                                               LinearPcaSubspace::load(a->integrator, data.physics),
+                                                               LinearPcaOptions{});
+        } else {
+            if (a->ae.empty()) throw ConfigError("rollout: --ae is required for a latent MLP integrator (" + a->integrator + ")");
+            auto ae = std::make_shared<Autoencoder>(Autoencoder::load(a->ae, data.physics));
+            const h5::File f = h5::File::open(a->integrator);
+            LatentMlpModel net = LatentMlpModel::load(f, "integrator.");
+            const std::string name = a->name.empty() ? net.loss : a->name;
+            integrator = std::make_unique<LatentMlpIntegrator>(name, ae, std::move(net));
+        }
         std::vector<RolloutResult> results;
         RolloutOptions options;
         options.max_frames = a->frames;
         options.keep_positions = !a->no_positions;
         options.progress = log_level() >= LogLevel::Info;
         for (size_t k : select_sequences(data, a->sequences)) {
-            results.push_back(rollout(integrator, model, data.sequences[k], options));
+            results.push_back(rollout(*integrator, model, data.sequences[k], options));
         }
         save_rollouts(results, a->output, data.scene_toml);
         print_summary_header();
         for (const auto& r : results) print_summary(r.method, r.sequence, r.summary);
         std::printf("wrote %s\n", a->output.c_str());
+    });
+}
+
+void register_fit_pca(CLI::App& app)
+{
+    struct Args {
+        std::string data, output;
+        long dim = 0;
+    };
+    auto a = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("fit-pca", "Fit the linear PCA subspace of the linear_pca baseline to a dataset");
+    cmd->add_option("data", a->data, "Dataset HDF5 from `simulate`")->required();
+    cmd->add_option("-o,--output", a->output, "Output subspace HDF5 (roll it out with `rollout --integrator`)")->required();
+    cmd->add_option("--dim", a->dim, "Subspace dimension (default: the scene's latent size)");
+    cmd->callback([a] {
+        if (a->dim < 0) throw ConfigError("--dim must be positive (got " + std::to_string(a->dim) + ")");
+        const Dataset data = load_dataset(a->data);
+        const Index dim = a->dim > 0 ? Index(a->dim) : default_latent_dim(data.scene_name);
+        const LinearPcaSubspace s = LinearPcaSubspace::fit(data, dim);
+        s.save(a->output);
+        std::printf("wrote %s: scene %s, %ld features -> d = %ld, %.6f of the training variance\n", a->output.c_str(),
+                    data.scene_name.c_str(), long(s.pca.basis.rows()), long(s.pca.dim()), s.pca.explained_fraction());
     });
 }
 

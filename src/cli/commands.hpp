@@ -10,6 +10,7 @@ void register_info(CLI::App& app);
 void register_train_integrator(CLI::App& app);
 void register_rollout(CLI::App& app);
 void register_evaluate(CLI::App& app);
+void register_fit_pca(CLI::App& app);
 void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);
 

@@ -98,5 +98,31 @@ TEST(Cli, SimulateWritesReadableDataset)
     EXPECT_NE(info.output.find("tiny"), std::string::npos) << info.output;
 }
 
+// The linear_pca baseline from the command line: fit a subspace, roll it out
+// (no --ae needed); a latent MLP file without --ae and a bad --dim are refused.
+TEST(Cli, FitPcaThenRollout)
+{
+    const std::string dir = fresh_dir("cli_pca");
+    write_file(dir + "/scene.toml", kScene);
+    ASSERT_EQ(run_cli("simulate " + dir + "/scene.toml -o " + dir + "/data.h5").exit_code, 0);
+    const auto fit = run_cli("fit-pca " + dir + "/data.h5 -o " + dir + "/pca.h5 --dim 2");
+    ASSERT_EQ(fit.exit_code, 0) << fit.output;
+    EXPECT_NE(fit.output.find("d = 2"), std::string::npos) << fit.output;
+    const auto roll = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/pca.h5 --sequences all -o " + dir +
+                              "/roll.h5");
+    ASSERT_EQ(roll.exit_code, 0) << roll.output;
+    EXPECT_NE(roll.output.find("linear_pca"), std::string::npos) << roll.output;
+    EXPECT_TRUE(fs::exists(dir + "/roll.h5"));
+
+    const auto bad_dim = run_cli("fit-pca " + dir + "/data.h5 -o " + dir + "/bad.h5 --dim -1");
+    EXPECT_NE(bad_dim.exit_code, 0);
+    EXPECT_NE(bad_dim.output.find("--dim"), std::string::npos) << bad_dim.output;
+    EXPECT_FALSE(fs::exists(dir + "/bad.h5"));
+    const auto no_ae = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/data.h5 -o " + dir + "/x.h5");
+    EXPECT_NE(no_ae.exit_code, 0);
+    EXPECT_NE(no_ae.output.find("--ae is required"), std::string::npos) << no_ae.output;
+    EXPECT_FALSE(fs::exists(dir + "/x.h5"));
+}
+
 } // namespace
 } // namespace lb
