@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
@@ -153,8 +154,12 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
     ++m_steps;
     for (int it = 0; it < m_options.max_iterations && !converged; ++it) {
         const VectorXd g = m_J.transpose() * m_potential.gradient(x);
-        if (!g.allFinite() || !std::isfinite(value))
-            throw NumericalError("linear_pca: non-finite energy or gradient in the reduced Newton solve");
+        if (!g.allFinite() || !std::isfinite(value)) {
+            // The subspace state blew up: report a non-finite state, which ends the
+            // rollout's stable horizon (eval/rollout.cpp) instead of aborting a suite.
+            q.setConstant(std::numeric_limits<double>::quiet_NaN());
+            break;
+        }
         if (g.norm() <= force_tol) {
             converged = true;
             break;
@@ -171,8 +176,8 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
         }
         double shift = 1e-10 * std::max(H.diagonal().cwiseAbs().maxCoeff(), 1e-300);
         while (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
-            if (shift > 1e6 * std::max(H.diagonal().cwiseAbs().maxCoeff(), 1.0))
-                throw NumericalError("linear_pca: the reduced Hessian cannot be made positive definite");
+            if (!H.allFinite() || shift > 1e6 * std::max(H.diagonal().cwiseAbs().maxCoeff(), 1.0))
+                break;  // caught below: the step direction is not finite or not a descent
             H.diagonal().array() += shift;
             shift *= 10.0;
             ldlt.compute(H);
@@ -180,6 +185,7 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
         ++m_iterations;
         const VectorXd dq = -ldlt.solve(g);
         const double slope = g.dot(dq);
+        if (!dq.allFinite() || !(slope < 0.0)) break;  // no descent direction: counted as unconverged
         double alpha = 1.0;
         bool accepted = false;
         for (int ls = 0; ls < 40; ++ls) {
