@@ -1,38 +1,24 @@
 // train-integrator, rollout, evaluate.
 #include <cstdio>
-#include <sstream>
 
 #include "cli/commands.hpp"
 
 #include "baselines/linear_pca/linear_pca.hpp"
 #include "core/error.hpp"
+#include "core/parse.hpp"
 #include "core/log.hpp"
 #include "eval/rollout.hpp"
 #include "integrators/trainer.hpp"
 #include "io/hdf5.hpp"
 
 namespace lb::cli {
-namespace {
-
-std::vector<Index> parse_widths(const std::string& text, const std::string& option)
+std::vector<Index> parse_hidden_option(const std::string& text)
 {
-    std::vector<Index> widths;
-    std::stringstream ss(text);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-        try {
-            const long w = std::stol(item);
-            if (w <= 0) throw std::invalid_argument("non-positive");
-            widths.push_back(w);
-        } catch (const std::exception&) {
-            throw ConfigError("option " + option + ": expected comma-separated positive widths, got '" + text + "'");
-        }
-    }
-    if (widths.empty()) throw ConfigError("option " + option + ": no widths given");
-    return widths;
+    const auto widths = parse_positive_list(text);
+    if (!widths || widths->empty())
+        throw ConfigError("--hidden: expected comma-separated positive widths such as 256,256,256 (got '" + text + "')");
+    return *widths;
 }
-
-} // namespace
 
 void register_train_integrator(CLI::App& app)
 {
@@ -74,7 +60,7 @@ void register_train_integrator(CLI::App& app)
         o.seed = a->seed;
         o.max_seconds = a->max_seconds;
         o.checkpoint_path = a->checkpoint;
-        o.hidden = a->hidden.empty() ? default_integrator_hidden(data.scene_name) : parse_widths(a->hidden, "--hidden");
+        o.hidden = a->hidden.empty() ? default_integrator_hidden(data.scene_name) : parse_hidden_option(a->hidden);
         o.progress = log_level() >= LogLevel::Info;
         if (o.epochs < 1) throw ConfigError("option --epochs must be at least 1");
         if (o.batch_size < 1) throw ConfigError("option --batch must be at least 1");

@@ -1,5 +1,4 @@
 #include <cstdio>
-#include <sstream>
 
 #include "cli/commands.hpp"
 #include "core/error.hpp"
@@ -8,27 +7,6 @@
 #include "sim/dataset.hpp"
 
 namespace lb::cli {
-
-namespace {
-
-std::vector<Index> parse_hidden(const std::string& text)
-{
-    std::vector<Index> widths;
-    std::stringstream ss(text);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-        char* end = nullptr;
-        const long long v = std::strtoll(item.c_str(), &end, 10);
-        if (item.empty() || end == item.c_str() || *end != '\0' || v <= 0)
-            throw ConfigError("--hidden: expected comma-separated positive widths such as 200,200,200 (got '" + text +
-                              "')");
-        widths.push_back(Index(v));
-    }
-    if (widths.empty()) throw ConfigError("--hidden: at least one width is needed (got '" + text + "')");
-    return widths;
-}
-
-} // namespace
 
 void register_train_ae(CLI::App& app)
 {
@@ -74,7 +52,7 @@ void register_train_ae(CLI::App& app)
         options.batch_size = args->batch;
         options.learning_rate = args->lr;
         options.pca_dim = Index(args->pca);
-        options.hidden = parse_hidden(args->hidden);
+        options.hidden = parse_hidden_option(args->hidden);
         options.seed = args->seed;
         options.checkpoint_path = args->checkpoint;
         options.checkpoint_every = args->checkpoint_every;

@@ -1,7 +1,12 @@
 #pragma once
 // Each subcommand registers itself on the CLI11 app; its callback runs the work
 // and throws lb::Error on bad input (main prints it and exits non-zero).
+#include <string>
+#include <vector>
+
 #include <CLI/CLI.hpp>
+
+#include "core/types.hpp"
 
 namespace lb::cli {
 
@@ -13,5 +18,9 @@ void register_evaluate(CLI::App& app);
 void register_fit_pca(CLI::App& app);
 void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);
+
+/// The --hidden option of train-ae and train-integrator: "256,256,256"; ConfigError naming
+/// the option if malformed or empty.
+std::vector<Index> parse_hidden_option(const std::string& text);
 
 } // namespace lb::cli

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/parse.hpp"
 #include "core/log.hpp"
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
@@ -119,18 +120,9 @@ std::string require_string(const h5::File& f, const std::string& key)
 
 std::vector<Index> parse_widths(const std::string& text, const std::string& where)
 {
-    std::vector<Index> widths;
-    if (text.empty()) return widths;
-    std::stringstream ss(text);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-        char* end = nullptr;
-        const long long v = std::strtoll(item.c_str(), &end, 10);
-        if (item.empty() || end == item.c_str() || *end != '\0' || v <= 0)
-            throw IoError(where + ": malformed hidden widths '" + text + "'");
-        widths.push_back(static_cast<Index>(v));
-    }
-    return widths;
+    const auto widths = parse_positive_list(text);
+    if (!widths) throw IoError(where + ": malformed hidden widths '" + text + "'");
+    return *widths;
 }
 
 } // namespace

@@ -1,0 +1,15 @@
+#pragma once
+// Small text parsers shared by the command line and the file readers.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace lb {
+
+/// "200,200,200" → {200, 200, 200}; "" → {}. std::nullopt if any item is empty, not a
+/// whole integer or not positive (callers raise the error type of their context).
+std::optional<std::vector<Index>> parse_positive_list(const std::string& text);
+
+} // namespace lb
