@@ -116,6 +116,33 @@ inline ::testing::AssertionResult check_rigid_invariance(const Energy& energy, c
     return ::testing::AssertionSuccess();
 }
 
+/// The standard derivative test of an energy: check_energy_gradient and
+/// check_energy_hessian at `trials` random perturbations of the rest state (amplitude
+/// `perturbation`, m), with `length_scale` as the FD scale. Fails naming the trial.
+inline ::testing::AssertionResult check_derivatives_near_rest(const Energy& energy, const MatrixX3d& rest,
+                                                              double perturbation, double length_scale, Rng& rng,
+                                                              int trials = 3)
+{
+    for (int trial = 0; trial < trials; ++trial) {
+        const VectorXd x = perturbed_state(rest, perturbation, rng);
+        for (const auto& result : {check_energy_gradient(energy, x, length_scale), check_energy_hessian(energy, x, length_scale)}) {
+            if (!result) return ::testing::AssertionFailure() << "trial " << trial << ": " << result.message();
+        }
+    }
+    return ::testing::AssertionSuccess();
+}
+
+/// check_rigid_invariance at `trials` random perturbations of the rest state.
+inline ::testing::AssertionResult check_rigid_invariance_near_rest(const Energy& energy, const MatrixX3d& rest,
+                                                                   double perturbation, Rng& rng, int trials = 3)
+{
+    for (int trial = 0; trial < trials; ++trial) {
+        const auto result = check_rigid_invariance(energy, perturbed_state(rest, perturbation, rng), rng);
+        if (!result) return ::testing::AssertionFailure() << "trial " << trial << ": " << result.message();
+    }
+    return ::testing::AssertionSuccess();
+}
+
 /// Every element Hessian is symmetric, and after projection its smallest eigenvalue is
 /// ≥ −kPsdTolerance·max|H|. Also reports how many elements were indefinite before
 /// projection (so a test can assert the projection was exercised).

@@ -7,11 +7,9 @@
 namespace lb {
 namespace {
 
+using testing::check_derivatives_near_rest;
 using testing::check_element_hessians;
-using testing::check_energy_gradient;
-using testing::check_energy_hessian;
-using testing::check_rigid_invariance;
-using testing::perturbed_state;
+using testing::check_rigid_invariance_near_rest;
 using testing::small_bundle;
 
 constexpr double kYoungs = 1e7;   // Pa
@@ -24,11 +22,7 @@ TEST(RodStretching, GradientAndHessianMatchFiniteDifferences)
     const Mesh mesh = small_bundle();
     const RodStretching energy(mesh.rest_positions, mesh.elements, kYoungs, kRadius);
     Rng rng(43);
-    for (int trial = 0; trial < 3; ++trial) {
-        const VectorXd x = perturbed_state(mesh.rest_positions, 0.3 * kSegment, rng);
-        EXPECT_TRUE(check_energy_gradient(energy, x, kSegment)) << "trial " << trial;
-        EXPECT_TRUE(check_energy_hessian(energy, x, kSegment)) << "trial " << trial;
-    }
+    EXPECT_TRUE(check_derivatives_near_rest(energy, mesh.rest_positions, 0.3 * kSegment, kSegment, rng));
 }
 
 TEST(RodStretching, InvariantUnderRigidMotion)
@@ -36,9 +30,7 @@ TEST(RodStretching, InvariantUnderRigidMotion)
     const Mesh mesh = small_bundle();
     const RodStretching energy(mesh.rest_positions, mesh.elements, kYoungs, kRadius);
     Rng rng(47);
-    for (int trial = 0; trial < 3; ++trial) {
-        EXPECT_TRUE(check_rigid_invariance(energy, perturbed_state(mesh.rest_positions, 0.2 * kSegment, rng), rng));
-    }
+    EXPECT_TRUE(check_rigid_invariance_near_rest(energy, mesh.rest_positions, 0.2 * kSegment, rng));
 }
 
 TEST(RodStretching, ElementHessiansSymmetricAndPsdAfterProjection)
