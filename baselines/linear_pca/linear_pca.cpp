@@ -13,6 +13,11 @@ namespace lb {
 
 namespace {
 constexpr const char* kFormat = "latentbench.linear_pca/1";
+
+bool has_subspace_format(const h5::File& f)
+{
+    return f.has_attribute("/", "format") && f.attribute_string("/", "format") == kFormat;
+}
 } // namespace
 
 LinearPcaSubspace LinearPcaSubspace::fit(const Dataset& data, Index dim)
@@ -50,7 +55,7 @@ LinearPcaSubspace LinearPcaSubspace::load(const std::string& path, const Physics
 {
     if (!std::filesystem::exists(path)) throw IoError(path + ": linear_pca file does not exist");
     const h5::File f = h5::File::open(path);
-    if (!f.has_attribute("/", "format") || f.attribute_string("/", "format") != kFormat)
+    if (!has_subspace_format(f))
         throw IoError(path + ": not a linear_pca subspace file (format attribute is not '" + std::string(kFormat) + "')");
     LinearPcaSubspace s;
     s.pca.mean = f.read_vector("linear_pca.mean");
@@ -70,8 +75,7 @@ LinearPcaSubspace LinearPcaSubspace::load(const std::string& path, const Physics
 
 bool LinearPcaSubspace::is_subspace_file(const std::string& path)
 {
-    const h5::File f = h5::File::open(path);
-    return f.has_attribute("/", "format") && f.attribute_string("/", "format") == kFormat;
+    return has_subspace_format(h5::File::open(path));
 }
 
 LinearPcaIntegrator::LinearPcaIntegrator(std::string name, const PhysicsModel& model, LinearPcaSubspace subspace,
@@ -124,7 +128,8 @@ void LinearPcaIntegrator::prepare_step(const BoundaryState& bc)
 {
     m_potential.set_previous(m_x_prev, m_x_prev2);
     if (m_potential.has_penalty()) m_potential.set_bc_targets(as_rows(bc.targets));
-    m_c = offset(bc);
+    m_c.resize(m_model.num_dofs());
+    m_encoding.to_positions_into(m_subspace.pca.mean, bc.targets, m_c);
 }
 
 double LinearPcaIntegrator::reduced_value(const VectorXd& q, const BoundaryState& bc, VectorXd* gradient)
@@ -151,6 +156,7 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
         value = m_potential.value(x);
     }
     bool converged = false;
+    VectorXd x_try(x.size());
     ++m_steps;
     for (int it = 0; it < m_options.max_iterations && !converged; ++it) {
         const VectorXd g = m_J.transpose() * m_potential.gradient(x);
@@ -158,6 +164,7 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
             // The subspace state blew up: report a non-finite state, which ends the
             // rollout's stable horizon (eval/rollout.cpp) instead of aborting a suite.
             q.setConstant(std::numeric_limits<double>::quiet_NaN());
+            x.setConstant(std::numeric_limits<double>::quiet_NaN());
             break;
         }
         if (g.norm() <= force_tol) {
@@ -189,7 +196,8 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
         double alpha = 1.0;
         bool accepted = false;
         for (int ls = 0; ls < 40; ++ls) {
-            const VectorXd x_try = m_J * (q + alpha * dq) + m_c;
+            x_try.noalias() = m_J * (q + alpha * dq);
+            x_try += m_c;
             const double v_try = m_potential.value(x_try);
             if (std::isfinite(v_try) && v_try <= value + 1e-4 * alpha * slope) {
                 q += alpha * dq;
@@ -212,16 +220,12 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
                      m_name.c_str());
         ++m_unconverged;
     }
-    const double integrate = timer.seconds();
-    Timer decode;  // the Newton iterations decode as they go; this is the output's decode
-    m_x.noalias() = m_J * q;
-    m_x += m_c;
-    const double decode_seconds = decode.seconds();
     m_q_prev = m_q;
     m_q = q;
     m_x_prev2.swap(m_x_prev);
-    m_x_prev = m_x;
-    return {integrate, decode_seconds};
+    m_x_prev = x;
+    m_x.swap(x);
+    return {timer.seconds(), 0.0};
 }
 
 } // namespace lb

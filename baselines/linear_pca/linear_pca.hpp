@@ -59,7 +59,8 @@ public:
     std::string name() const override { return m_name; }
     void reset(const VectorXd& x_prev2, const BoundaryState& bc_prev2, const VectorXd& x_prev,
                const BoundaryState& bc_prev) override;
-    /// Integration: the reduced Newton solve; decoding: x = J q + c_t once at the end.
+    /// All of it counts as integration: every Newton iteration decodes x = J q + c_t
+    /// to evaluate the full-space energy, so there is no separate decode.
     StepTiming step(const BoundaryState& bc) override;
     const VectorXd& positions() const override { return m_x; }
     const VectorXd& latent() const override { return m_q; }

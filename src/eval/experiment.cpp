@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <map>
 #include <sstream>
 
@@ -494,42 +496,56 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
             return rolls;
         };
 
+        // Every method's rollouts: one cached stage per method, then its row.
+        auto rollout_key = [&](const std::string& method_key) {
+            return hash_hex(method_key + "|rollout|" + ex.sequences + "|" + std::to_string(ex.rollout_frames));
+        };
+        auto add_method = [&](MethodResult mr, const std::string& rkey,
+                              const std::function<std::unique_ptr<Integrator>()>& make,
+                              const std::function<void(const Integrator&)>& after = {}) {
+            mr.rollout_file = dir + "/rollouts/" + mr.name + ".h5";
+            cache.run("rollouts", spec.label + ": rollout '" + mr.name + "'", mr.rollout_file, rkey, [&] {
+                const std::unique_ptr<Integrator> integrator = make();
+                save_rollouts(roll_out(*integrator), mr.rollout_file, ex.toml_text);
+                if (after) after(*integrator);
+            });
+            r.methods.push_back(std::move(mr));
+        };
+
         // integrators and their rollouts
         for (const IntegratorSpec& m : spec.integrators) {
             MethodResult mr;
             mr.name = m.name;
             mr.kind = m.kind;
+            const std::string file = dir + "/integrators/" + m.name + ".h5";
             if (m.kind == MethodKind::LinearPca) {
                 LinearPcaOptions lo = m.linear_pca;
                 if (lo.dim == 0) lo.dim = ae->latent_dim();
-                const std::string file = dir + "/integrators/" + m.name + ".h5";
                 std::ostringstream desc;
                 desc << "linear_pca|dim=" << lo.dim << "|w_bc=" << lo.penalty_weight << "|it=" << lo.max_iterations
                      << "|tol=" << lo.gradient_tolerance << "," << lo.step_tolerance;
                 const std::string key = hash_hex(sim_key + "|" + desc.str());
                 cache.run("integrators", spec.label + ": linear PCA subspace '" + m.name + "' (d = " + std::to_string(lo.dim) + ")",
                           file, key, [&] { LinearPcaSubspace::fit(data, lo.dim).save(file); });
-                LinearPcaSubspace subspace = LinearPcaSubspace::load(file, data.physics);
+                const LinearPcaSubspace subspace = LinearPcaSubspace::load(file, data.physics);
                 mr.linear_pca_dim = subspace.pca.dim();
-                mr.rollout_file = dir + "/rollouts/" + m.name + ".h5";
-                const std::string rkey = hash_hex(key + "|rollout|" + ex.sequences + "|" + std::to_string(ex.rollout_frames));
-                cache.run("rollouts", spec.label + ": rollout '" + m.name + "'", mr.rollout_file, rkey, [&] {
-                    LinearPcaIntegrator integrator(m.name, model, std::move(subspace), lo);
-                    save_rollouts(roll_out(integrator), mr.rollout_file, ex.toml_text);
-                    log_info("%s: linear PCA '%s': %.2f reduced Newton iterations per step", spec.label.c_str(),
-                             m.name.c_str(), integrator.mean_iterations());
-                    if (integrator.unconverged_steps() > 0)
-                        log_warn("%s: linear PCA '%s': %d reduced Newton solves stopped before converging", spec.label.c_str(),
-                                 m.name.c_str(), integrator.unconverged_steps());
-                });
-                r.methods.push_back(mr);
+                add_method(
+                    mr, rollout_key(key),
+                    [&] { return std::make_unique<LinearPcaIntegrator>(m.name, model, subspace, lo); },
+                    [&](const Integrator& integrator) {
+                        const auto& pca = static_cast<const LinearPcaIntegrator&>(integrator);
+                        log_info("%s: linear PCA '%s': %.2f reduced Newton iterations per step", spec.label.c_str(),
+                                 m.name.c_str(), pca.mean_iterations());
+                        if (pca.unconverged_steps() > 0)
+                            log_warn("%s: linear PCA '%s': %d reduced Newton solves stopped before converging",
+                                     spec.label.c_str(), m.name.c_str(), pca.unconverged_steps());
+                    });
                 continue;
             }
             mr.options = m.options;
             if (!m.hidden_given) mr.options.hidden = default_integrator_hidden(scene.name);
             mr.options.progress = log_level() >= LogLevel::Info;
             mr.options.checkpoint_path = dir + "/integrators/" + m.name + ".checkpoint.h5";
-            const std::string file = dir + "/integrators/" + m.name + ".h5";
             const std::string key = hash_hex(ae_key + "|integrator|" + mr.options.describe() + "|" +
                                              std::to_string(mr.options.epochs) + "|" + std::to_string(mr.options.max_seconds) +
                                              "|" + std::to_string(mr.options.noise_fraction) + "|" +
@@ -551,25 +567,16 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
                 }
                 out.commit();
             });
-            mr.rollout_file = dir + "/rollouts/" + m.name + ".h5";
-            const std::string rkey = hash_hex(key + "|rollout|" + ex.sequences + "|" + std::to_string(ex.rollout_frames));
-            cache.run("rollouts", spec.label + ": rollout '" + m.name + "'", mr.rollout_file, rkey, [&] {
+            add_method(mr, rollout_key(key), [&] {
                 const h5::File f = h5::File::open(file);
-                LatentMlpIntegrator integrator(m.name, ae, LatentMlpModel::load(f, "integrator."));
-                save_rollouts(roll_out(integrator), mr.rollout_file, ex.toml_text);
+                return std::make_unique<LatentMlpIntegrator>(m.name, ae, LatentMlpModel::load(f, "integrator."));
             });
-            r.methods.push_back(mr);
         }
         if (ex.full_space) {
             MethodResult mr;
             mr.name = "full_space";
-            mr.rollout_file = dir + "/rollouts/full_space.h5";
-            const std::string rkey = hash_hex(sim_key + "|full_space|" + ex.sequences + "|" + std::to_string(ex.rollout_frames));
-            cache.run("rollouts", spec.label + ": rollout 'full_space'", mr.rollout_file, rkey, [&] {
-                FullSpaceIntegrator integrator(model, scene.newton);
-                save_rollouts(roll_out(integrator), mr.rollout_file, ex.toml_text);
-            });
-            r.methods.push_back(mr);
+            add_method(mr, hash_hex(sim_key + "|full_space|" + ex.sequences + "|" + std::to_string(ex.rollout_frames)),
+                       [&] { return std::make_unique<FullSpaceIntegrator>(model, scene.newton); });
         }
         // Summaries back from the rollout files (cached or fresh alike).
         for (MethodResult& mr : r.methods) {
