@@ -1,3 +1,4 @@
+#include "lb_paths.hpp"
 #include "eval/experiment.hpp"
 
 #include <cstdio>

@@ -1,3 +1,4 @@
+#include "lb_paths.hpp"
 #include "io/table.hpp"
 
 #include <sys/utsname.h>

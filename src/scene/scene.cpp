@@ -1,3 +1,4 @@
+#include "lb_paths.hpp"
 #include "scene/scene.hpp"
 
 #include <Eigen/Geometry>

@@ -3,6 +3,7 @@
 // the scene's first sequence (after a few warm-up frames), so the measured
 // steps are real dynamic steps. Counters: Newton iterations per step, DOFs,
 // Hessian non-zeros. Full-size Armadillo/Bunny need scripts/prepare_meshes.
+#include "lb_paths.hpp"
 #include <benchmark/benchmark.h>
 
 #include <filesystem>

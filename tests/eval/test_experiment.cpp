@@ -1,3 +1,4 @@
+#include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
 #include <filesystem>

@@ -1,6 +1,7 @@
 #pragma once
 // A tiny learning problem shared by the integrator tests: the small cantilever
 // (few frames), a small PCA-initialised autoencoder, a small integrator.
+#include "lb_paths.hpp"
 #include <memory>
 
 #include "core/log.hpp"

@@ -1,5 +1,6 @@
 // Table writers (Markdown, CSV, LaTeX), atomic writing, provenance, the paper's
 // published tables, and scripts/plot_rollouts.py on a rollout file written here.
+#include "lb_paths.hpp"
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 

@@ -1,6 +1,7 @@
 #pragma once
 // Shared fixtures of the latent tests: small physics built from the mesh
 // generators, and the small cloth dataset.
+#include "lb_paths.hpp"
 #include <string>
 
 #include "core/rng.hpp"

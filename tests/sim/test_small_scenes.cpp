@@ -1,4 +1,5 @@
 // Newton converges on every frame of every small scene.
+#include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
 #include "sim/dataset.hpp"

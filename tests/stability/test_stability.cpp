@@ -4,6 +4,7 @@
 // results/stability_thresholds.toml. A failure names the scene, method and
 // metric and says by how much it regressed. To update the thresholds
 // deliberately, see README.md ("Stability regression").
+#include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
 #include <filesystem>
