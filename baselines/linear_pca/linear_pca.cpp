@@ -1,7 +1,6 @@
 #include "baselines/linear_pca/linear_pca.hpp"
 
 #include <cmath>
-#include <filesystem>
 #include <limits>
 
 #include "core/error.hpp"
@@ -13,12 +12,7 @@ namespace lb {
 
 namespace {
 constexpr const char* kFormat = "latentbench.linear_pca/1";
-
-bool has_subspace_format(const h5::File& f)
-{
-    return f.has_attribute("/", "format") && f.attribute_string("/", "format") == kFormat;
 }
-} // namespace
 
 LinearPcaSubspace LinearPcaSubspace::fit(const Dataset& data, Index dim)
 {
@@ -31,38 +25,30 @@ LinearPcaSubspace LinearPcaSubspace::fit(const Dataset& data, Index dim)
     const MatrixXd features = encoding.to_features(frames.positions);
     LinearPcaSubspace s;
     s.pca = compute_pca(features, std::min<Index>(dim, std::min<Index>(features.rows(), features.cols() - 1)));
-    s.scene_name = data.scene_name;
     return s;
 }
 
-void LinearPcaSubspace::save(const std::string& path) const
+void LinearPcaSubspace::save(h5::File& f) const
 {
-    h5::AtomicOutput out(path);
-    {
-        h5::File f = h5::File::create(out.temp_path());
-        f.write("linear_pca.mean", pca.mean);
-        f.write("linear_pca.basis", pca.basis);
-        f.write("linear_pca.variances", pca.variances);
-        f.set_attribute("/", "format", std::string(kFormat));
-        f.set_attribute("/", "scene", scene_name);
-        f.set_attribute("/", "total_variance", pca.total_variance);
-        f.set_attribute("/", "explained_variance", pca.explained_fraction());
-    }
-    out.commit();
+    f.write("linear_pca.mean", pca.mean);
+    f.write("linear_pca.basis", pca.basis);
+    f.write("linear_pca.variances", pca.variances);
+    f.set_attribute("/", "linear_pca.format", std::string(kFormat));
+    f.set_attribute("/", "linear_pca.total_variance", pca.total_variance);
+    f.set_attribute("/", "linear_pca.explained_variance", pca.explained_fraction());
 }
 
-LinearPcaSubspace LinearPcaSubspace::load(const std::string& path, const PhysicsSpec& physics)
+LinearPcaSubspace LinearPcaSubspace::load(const h5::File& f, const PhysicsSpec& physics)
 {
-    if (!std::filesystem::exists(path)) throw IoError(path + ": linear_pca file does not exist");
-    const h5::File f = h5::File::open(path);
-    if (!has_subspace_format(f))
-        throw IoError(path + ": not a linear_pca subspace file (format attribute is not '" + std::string(kFormat) + "')");
+    const std::string& path = f.path();
+    if (!f.has_attribute("/", "linear_pca.format") || f.attribute_string("/", "linear_pca.format") != kFormat)
+        throw IoError(path + ": holds no linear_pca subspace (attribute linear_pca.format is not '" +
+                      std::string(kFormat) + "')");
     LinearPcaSubspace s;
     s.pca.mean = f.read_vector("linear_pca.mean");
     s.pca.basis = f.read_matrix("linear_pca.basis");
     s.pca.variances = f.read_vector("linear_pca.variances");
-    s.pca.total_variance = f.attribute_double("/", "total_variance");
-    s.scene_name = f.attribute_string("/", "scene");
+    s.pca.total_variance = f.attribute_double("/", "linear_pca.total_variance");
     const Index F = BcRelativeEncoding(physics).num_features();
     if (s.pca.mean.size() != F || s.pca.basis.rows() != F || s.pca.variances.size() != s.pca.basis.cols() ||
         s.pca.basis.cols() < 1)
@@ -71,11 +57,6 @@ LinearPcaSubspace LinearPcaSubspace::load(const std::string& path, const Physics
                       ") do not match the scene's " + std::to_string(F) + " features");
     if (!s.pca.basis.allFinite() || !s.pca.mean.allFinite()) throw IoError(path + ": linear_pca basis is not finite");
     return s;
-}
-
-bool LinearPcaSubspace::is_subspace_file(const std::string& path)
-{
-    return has_subspace_format(h5::File::open(path));
 }
 
 LinearPcaIntegrator::LinearPcaIntegrator(std::string name, const PhysicsModel& model, LinearPcaSubspace subspace,

@@ -25,6 +25,10 @@
 #include "latent/pca.hpp"
 #include "sim/dataset.hpp"
 
+namespace lb::h5 {
+class File;
+}
+
 namespace lb {
 
 struct LinearPcaOptions {
@@ -38,18 +42,16 @@ struct LinearPcaOptions {
 /// The subspace: PCA of the BC-relative features of a dataset's training frames.
 struct LinearPcaSubspace {
     PcaBasis pca;
-    std::string scene_name;
 
     /// @throws ConfigError if dim < 1 or the dataset has fewer than 2 training frames
     static LinearPcaSubspace fit(const Dataset& data, Index dim);
-    /// Written atomically. Datasets: linear_pca.mean (F), linear_pca.basis (F × d),
-    /// linear_pca.variances (d); attributes format "latentbench.linear_pca/1", scene,
-    /// explained_variance.
-    void save(const std::string& path) const;
-    /// IoError naming the file if it is not a linear_pca file or F does not match.
-    static LinearPcaSubspace load(const std::string& path, const PhysicsSpec& physics);
-    /// True if `path` is an HDF5 file written by save() (false for other HDF5 files).
-    static bool is_subspace_file(const std::string& path);
+    /// Into an open file (a method artefact, methods/artefact.hpp): datasets
+    /// linear_pca.mean (F), linear_pca.basis (F × d), linear_pca.variances (d); attributes
+    /// linear_pca.format "latentbench.linear_pca/1", linear_pca.total_variance,
+    /// linear_pca.explained_variance.
+    void save(h5::File& file) const;
+    /// IoError naming the file if it holds no subspace or F does not match the scene.
+    static LinearPcaSubspace load(const h5::File& file, const PhysicsSpec& physics);
 };
 
 class LinearPcaIntegrator final : public Integrator {

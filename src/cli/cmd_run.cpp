@@ -1,7 +1,8 @@
 #include <cstdio>
 
+#include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
-#include "eval/experiment.hpp"
+#include "pipeline/experiment.hpp"
 
 namespace lb::cli {
 
@@ -18,7 +19,7 @@ void register_run(CLI::App& app)
     cmd->add_option("--force", a->force,
                     "Redo a stage even if cached: simulate, autoencoder, integrators, rollouts, tables, plots, all");
     cmd->callback([a] {
-        const ExperimentConfig ex = load_experiment(a->experiment);
+        const ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
         RunOptions options;
         options.output_dir = a->output;
         options.force.insert(a->force.begin(), a->force.end());

@@ -1,5 +1,6 @@
 #include <cstdio>
 
+#include "paper/scene_defaults.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/log.hpp"

@@ -12,14 +12,14 @@ namespace lb::cli {
 
 void register_simulate(CLI::App& app);
 void register_info(CLI::App& app);
-void register_train_integrator(CLI::App& app);
+void register_methods(CLI::App& app);
+void register_fit(CLI::App& app);
 void register_rollout(CLI::App& app);
 void register_evaluate(CLI::App& app);
-void register_fit_pca(CLI::App& app);
 void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);
 
-/// The --hidden option of train-ae and train-integrator: "256,256,256"; ConfigError naming
+/// The --hidden option of train-ae: "256,256,256"; ConfigError naming
 /// the option if malformed or empty.
 std::vector<Index> parse_hidden_option(const std::string& text);
 

@@ -44,10 +44,10 @@ int main(int argc, char** argv)
     });
     lb::cli::register_simulate(app);
     lb::cli::register_info(app);
-    lb::cli::register_train_integrator(app);
+    lb::cli::register_methods(app);
+    lb::cli::register_fit(app);
     lb::cli::register_rollout(app);
     lb::cli::register_evaluate(app);
-    lb::cli::register_fit_pca(app);
     lb::cli::register_run(app);
     lb::cli::register_train_ae(app);
     try {

@@ -38,14 +38,6 @@ std::string IntegratorTrainOptions::describe() const
     return s.str();
 }
 
-std::vector<Index> default_integrator_hidden(const std::string& scene_name)
-{
-    if (scene_name == "cloth") return {32, 32};
-    if (scene_name == "rods_rotate") return {512, 512, 512};
-    if (scene_name == "rods_translate") return {256, 256, 256};
-    return {256, 256, 256, 256, 256};
-}
-
 TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
 {
     std::vector<Index> counts;

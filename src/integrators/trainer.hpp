@@ -46,6 +46,8 @@ struct IntegratorTrainOptions {
     double max_seconds = 0.0;
     std::string checkpoint_path;
     int checkpoint_every = 100;
+    /// false: never resume; an existing checkpoint is set aside (the pipeline's --force).
+    bool resume = true;
     bool progress = true;
     /// One line for logs and file attributes.
     std::string describe() const;
@@ -117,9 +119,5 @@ private:
     double m_velocity_floor = 1e-6;
     MatrixXd m_decoded_prev, m_decoded_prev2;  ///< 3N × S cache (empty: decode every batch)
 };
-
-/// The paper's Table 2 integrator widths per scene (cloth 32×2, hair 512×3 / 256×3,
-/// solids 256×5); 256×5 for anything else.
-std::vector<Index> default_integrator_hidden(const std::string& scene_name);
 
 } // namespace lb

@@ -202,6 +202,19 @@ std::optional<ConfigTable> ConfigTable::table(const std::string& key)
     return ConfigTable(*t, key_path(key), m_source);
 }
 
+void ConfigTable::accept_all()
+{
+    for (const auto& [key, node] : *m_table) m_used.insert(std::string(key.str()));
+}
+
+const toml::table* ConfigTable::raw_table(const std::string& key) const
+{
+    const toml::node* node = m_table->get(key);
+    if (!node) return nullptr;
+    if (!node->as_table()) fail(key, "expected a table");
+    return node->as_table();
+}
+
 ConfigTable ConfigTable::require_table(const std::string& key)
 {
     auto t = table(key);

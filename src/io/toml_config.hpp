@@ -46,6 +46,11 @@ public:
 
     /// Mark a key as known without reading it (e.g. consumed elsewhere).
     void accept(const std::string& key) { m_used.insert(key); }
+    /// Mark every key as known: the table is validated by whoever reads it.
+    void accept_all();
+    /// The sub-table itself (nullptr if absent; ConfigError if not a table), for
+    /// merging; its keys are not marked as read.
+    const toml::table* raw_table(const std::string& key) const;
     /// Throw ConfigError for the first key that was never read.
     void finish() const;
 

@@ -309,13 +309,6 @@ FrameSet training_frames(const Dataset& data)
     return fs;
 }
 
-Index default_latent_dim(const std::string& scene_name)
-{
-    if (scene_name == "armadillo") return 12;
-    if (scene_name == "bunny_ears") return 8;
-    return 4;  // rods_*, cloth, cantilever and anything else
-}
-
 // ---- training ----------------------------------------------------------------------
 
 namespace {

@@ -44,6 +44,7 @@ struct AutoencoderOptions {
     /// Checkpoint file (empty: none); training resumes from it if it exists and matches.
     std::string checkpoint_path;
     int checkpoint_every = 100;
+    bool resume = true;
     bool progress = true;
 };
 
@@ -159,8 +160,5 @@ FrameSet training_frames(const Dataset& data);
 /// - Same seed and data → bitwise-identical weights (single-threaded Eigen).
 AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& options);
 
-/// Scene-specific default latent size (rods 4, cloth 4, armadillo 12, bunny_ears 8,
-/// cantilever 4; anything else 4). Rod scenes match by the prefix "rods".
-Index default_latent_dim(const std::string& scene_name);
 
 } // namespace lb

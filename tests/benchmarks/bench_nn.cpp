@@ -7,7 +7,7 @@
 //                                    latent (Table 2 "Computing Jvp")
 // precision: float = InferenceNetwork, double = InferenceNetworkD (same fused ops),
 // double_sequential = the training-path Sequential::forward in eval mode.
-// Architectures: nn/paper_architectures.hpp (decoder: residual blocks + BatchNorm +
+// Architectures: paper/paper_architectures.hpp (decoder: residual blocks + BatchNorm +
 // Swish, PCA layer 50 -> DOF; integrator: Swish MLP with input 2·latent + 3·p).
 // Counters: madds = multiply-adds per frame, weight_GBps = packed weight bytes
 // streamed per second.
@@ -19,7 +19,7 @@
 #include "nn/inference_network.hpp"
 #include "nn/mlp_spec.hpp"
 #include "nn/network_derivatives.hpp"
-#include "nn/paper_architectures.hpp"
+#include "paper/paper_architectures.hpp"
 
 namespace {
 

@@ -98,14 +98,16 @@ TEST(Cli, SimulateWritesReadableDataset)
     EXPECT_NE(info.output.find("tiny"), std::string::npos) << info.output;
 }
 
-// The linear_pca baseline from the command line: fit a subspace, roll it out
-// (no --ae needed); a latent MLP file without --ae and a bad --dim are refused.
-TEST(Cli, FitPcaThenRollout)
+// Methods from the command line through the registry: `fit --method linear_pca`, then
+// `rollout` rebuilds the method from the artefact alone (no --ae needed); a bad option,
+// an unknown method or key, a latent method without --ae and a non-artefact file are
+// refused, naming the problem, with no output left behind.
+TEST(Cli, FitThenRolloutThroughTheRegistry)
 {
-    const std::string dir = fresh_dir("cli_pca");
+    const std::string dir = fresh_dir("cli_fit");
     write_file(dir + "/scene.toml", kScene);
     ASSERT_EQ(run_cli("simulate " + dir + "/scene.toml -o " + dir + "/data.h5").exit_code, 0);
-    const auto fit = run_cli("fit-pca " + dir + "/data.h5 -o " + dir + "/pca.h5 --dim 2");
+    const auto fit = run_cli("fit --method linear_pca " + dir + "/data.h5 -o " + dir + "/pca.h5 --set dim=2");
     ASSERT_EQ(fit.exit_code, 0) << fit.output;
     EXPECT_NE(fit.output.find("d = 2"), std::string::npos) << fit.output;
     const auto roll = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/pca.h5 --sequences all -o " + dir +
@@ -113,14 +115,33 @@ TEST(Cli, FitPcaThenRollout)
     ASSERT_EQ(roll.exit_code, 0) << roll.output;
     EXPECT_NE(roll.output.find("linear_pca"), std::string::npos) << roll.output;
     EXPECT_TRUE(fs::exists(dir + "/roll.h5"));
+    const auto reference = run_cli("rollout " + dir + "/data.h5 --method full_space --sequences all --frames 5 -o " +
+                                   dir + "/ref.h5");
+    ASSERT_EQ(reference.exit_code, 0) << reference.output;
 
-    const auto bad_dim = run_cli("fit-pca " + dir + "/data.h5 -o " + dir + "/bad.h5 --dim -1");
+    const auto methods = run_cli("methods");
+    ASSERT_EQ(methods.exit_code, 0) << methods.output;
+    for (const char* name : {"latent_mlp", "linear_pca", "full_space"})
+        EXPECT_NE(methods.output.find(name), std::string::npos) << methods.output;
+
+    const auto bad_dim = run_cli("fit --method linear_pca " + dir + "/data.h5 -o " + dir + "/bad.h5 --set dim=-1");
     EXPECT_NE(bad_dim.exit_code, 0);
-    EXPECT_NE(bad_dim.output.find("--dim"), std::string::npos) << bad_dim.output;
+    EXPECT_NE(bad_dim.output.find("dim"), std::string::npos) << bad_dim.output;
     EXPECT_FALSE(fs::exists(dir + "/bad.h5"));
-    const auto no_ae = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/data.h5 -o " + dir + "/x.h5");
+    const auto bad_key = run_cli("fit --method linear_pca " + dir + "/data.h5 -o " + dir + "/bad.h5 --set dimm=2");
+    EXPECT_NE(bad_key.exit_code, 0);
+    EXPECT_NE(bad_key.output.find("dimm"), std::string::npos) << bad_key.output;
+    EXPECT_FALSE(fs::exists(dir + "/bad.h5"));
+    const auto bad_method = run_cli("fit --method cubature " + dir + "/data.h5 -o " + dir + "/bad.h5");
+    EXPECT_NE(bad_method.exit_code, 0);
+    EXPECT_NE(bad_method.output.find("cubature"), std::string::npos) << bad_method.output;
+    const auto no_ae = run_cli("fit --method latent_mlp " + dir + "/data.h5 -o " + dir + "/bad.h5");
     EXPECT_NE(no_ae.exit_code, 0);
     EXPECT_NE(no_ae.output.find("--ae is required"), std::string::npos) << no_ae.output;
+    EXPECT_FALSE(fs::exists(dir + "/bad.h5"));
+    const auto not_artefact = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/data.h5 -o " + dir + "/x.h5");
+    EXPECT_NE(not_artefact.exit_code, 0);
+    EXPECT_NE(not_artefact.output.find("not a method artefact"), std::string::npos) << not_artefact.output;
     EXPECT_FALSE(fs::exists(dir + "/x.h5"));
 }
 

@@ -2,6 +2,7 @@
 // balancing on) trained on the first frames of the small cantilever and small
 // cloth rolls out at least 1,000 frames (≥ 3× the training horizon) without a
 // non-finite state and with the Dirichlet vertices within a stated bound.
+#include "paper/scene_defaults.hpp"
 #include "lb_paths.hpp"
 #include <gtest/gtest.h>
 

@@ -17,7 +17,7 @@
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "eval/metrics.hpp"
-#include "eval/paper_numbers.hpp"
+#include "paper/paper_numbers.hpp"
 #include "io/hdf5.hpp"
 #include "io/table.hpp"
 #include "support/cli_runner.hpp"

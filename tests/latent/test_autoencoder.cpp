@@ -1,5 +1,6 @@
 // The autoencoder: architecture, PCA initialisation, derivatives, save/load,
 // reproducible training with checkpoints, and reconstruction accuracy on the small cloth.
+#include "paper/scene_defaults.hpp"
 #include "lb_paths.hpp"
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include "nn/linear.hpp"
 #include "nn/mlp_spec.hpp"
 #include "nn/network_derivatives.hpp"
-#include "nn/paper_architectures.hpp"
+#include "paper/paper_architectures.hpp"
 #include "nn/residual_block.hpp"
 #include "nn_test_support.hpp"
 

@@ -4,7 +4,7 @@
 #include "nn/batch_norm.hpp"
 #include "nn/linear.hpp"
 #include "nn/mlp_spec.hpp"
-#include "nn/paper_architectures.hpp"
+#include "paper/paper_architectures.hpp"
 #include "nn/residual_block.hpp"
 
 namespace lb::nn {

@@ -10,7 +10,8 @@
 #include <filesystem>
 
 #include "core/log.hpp"
-#include "eval/experiment.hpp"
+#include "baselines/builtin_methods.hpp"
+#include "pipeline/experiment.hpp"
 #include "io/hdf5.hpp"
 #include "io/toml_config.hpp"
 
@@ -21,7 +22,7 @@ TEST(Stability, QuickstartSizeProblemsMeetCommittedThresholds)
 {
     set_log_level(LogLevel::Quiet);
     const std::string root = LB_SOURCE_DIR;
-    const ExperimentConfig ex = load_experiment(root + "/experiments/stability.toml");
+    const ExperimentConfig ex = load_experiment(root + "/experiments/stability.toml", builtin_methods());
     RunOptions options;
     options.output_dir = std::string(LB_TEST_TMP_DIR) + "/stability_run";
     // Stage keys hash the configuration, not the code: a regression test must retrain

@@ -1,31 +1,30 @@
 #pragma once
 // Experiment suites: one TOML file describes scenes, dataset generation, the
-// autoencoder, the integrators to compare, the evaluation protocol and the
-// outputs (schema in README.md, "Experiment files"). `latentbench run` executes
-//   simulate → train autoencoder → train integrators → roll out → tables → plots
-// per scene, caching every stage: each output has a sidecar `<file>.key` holding
-// a hash of the configuration that produced it (and of its inputs' keys); a
-// re-run skips a stage whose key matches, `--force STAGE` redoes it.
+// autoencoder, the methods to compare, the evaluation protocol and the outputs
+// (schema in README.md, "Experiment files"). `latentbench run` executes
+//   simulate → train autoencoder → fit methods → roll out → tables → plots
+// per scene, caching every stage (pipeline/stage_cache.hpp).
+//
+// The pipeline in pieces:
+//   experiment.hpp / experiment_config.cpp   the configuration and its parser
+//   stage_cache.hpp                           keys, --force, stale checkpoints
+//   run_experiment.cpp                        stage execution per scene
+//   report.hpp                                tables from the rollout files
+//   plots.hpp                                 figures (Python scripts, fork/exec)
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
 
-#include "baselines/linear_pca/linear_pca.hpp"
-#include "integrators/trainer.hpp"
 #include "latent/autoencoder.hpp"
+#include "methods/registry.hpp"
 
 namespace lb {
 
-/// What an [[integrators]] entry builds: the latent MLP of Li et al. (trained with
-/// `options`), or a baseline that needs no network.
-enum class MethodKind { LatentMlp, LinearPca };
-
-struct IntegratorSpec {
-    std::string name;  ///< label in tables and file names
-    MethodKind kind = MethodKind::LatentMlp;
-    IntegratorTrainOptions options;  ///< latent MLP only
-    bool hidden_given = false;  ///< else the paper's widths for the scene
-    LinearPcaOptions linear_pca;   ///< linear_pca only; dim 0: the scene's latent size
+/// One [[integrators]] entry on one scene.
+struct MethodSpec {
+    std::string name;                ///< label in tables and file names
+    std::shared_ptr<Method> method;  ///< parsed options (resolved when the scene is known)
 };
 
 struct SceneSpec {
@@ -34,7 +33,7 @@ struct SceneSpec {
     std::string label;       ///< folder name and table label, e.g. "cloth_small"
     AutoencoderOptions autoencoder;
     bool latent_given = false;
-    std::vector<IntegratorSpec> integrators;
+    std::vector<MethodSpec> methods;
 };
 
 struct AblationSpec {
@@ -62,8 +61,9 @@ struct ExperimentConfig {
     std::vector<AblationSpec> ablations;
 };
 
-/// Parse and validate; ConfigError naming the key on bad input.
-ExperimentConfig load_experiment(const std::string& path);
+/// Parse and validate; ConfigError naming the key on bad input. Each [[integrators]]
+/// entry is parsed by the method its `method` key names (default "latent_mlp").
+ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry);
 
 /// Pipeline stages, in order (names accepted by --force).
 const std::vector<std::string>& experiment_stages();

@@ -1,4 +1,4 @@
-#include "eval/paper_numbers.hpp"
+#include "paper/paper_numbers.hpp"
 
 namespace lb {
 

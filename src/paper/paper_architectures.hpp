@@ -1,6 +1,7 @@
 #pragma once
 // The network sizes of Li et al. 2025, Table 2 (and the DOF / latent sizes of
-// Table 1), as MlpSpecs, for benchmarks and for regenerating Table 2.
+// Table 1), as MlpSpecs, for benchmarks and for regenerating Table 2. Derived from
+// the quoted rows in paper/paper_numbers.hpp; keyed by our scene names.
 //
 // Decoder (paper §3.2, DESIGN §4): latent → residual blocks with BatchNorm and Swish
 // at the listed hidden widths → Linear to d_pca = 50 → PCA Linear 50 → DOF (no
@@ -17,7 +18,7 @@
 namespace lb::nn {
 
 struct PaperArchitecture {
-    std::string name;            ///< e.g. "armadillo"
+    std::string name;            ///< our scene name, e.g. "armadillo", "rods_rotate"
     std::string label;           ///< e.g. "Armadillo" (as printed in the paper)
     Index full_dof = 0;
     Index latent_dim = 0;
@@ -31,7 +32,7 @@ struct PaperArchitecture {
 /// The five examples of Table 2, in the paper's order.
 std::vector<PaperArchitecture> table2_architectures();
 
-/// Lookup by name ("hair_rotation", "hair_translation", "cloth", "armadillo",
+/// Lookup by our scene name ("rods_rotate", "rods_translate", "cloth", "armadillo",
 /// "bunny_ears"); throws ConfigError for an unknown name.
 PaperArchitecture table2_architecture(const std::string& name);
 

@@ -7,7 +7,8 @@
 
 #include "core/error.hpp"
 #include "core/log.hpp"
-#include "eval/experiment.hpp"
+#include "baselines/builtin_methods.hpp"
+#include "pipeline/experiment.hpp"
 
 namespace lb {
 namespace {
@@ -60,7 +61,7 @@ TEST(Experiment, EveryShippedSuiteIsValid)
     int count = 0;
     for (const auto& entry : fs::directory_iterator(fs::path(LB_SOURCE_DIR) / "experiments")) {
         if (entry.path().extension() != ".toml") continue;
-        const ExperimentConfig ex = load_experiment(entry.path().string());
+        const ExperimentConfig ex = load_experiment(entry.path().string(), builtin_methods());
         EXPECT_FALSE(ex.scenes.empty()) << entry.path();
         EXPECT_FALSE(ex.scenes.front().integrators.empty()) << entry.path();
         ++count;
@@ -73,7 +74,7 @@ TEST(Experiment, RejectsBadKeysByName)
     std::string text = kTiny;
     text.replace(text.find("epochs = 5"), 10, "epoch = 5");
     try {
-        load_experiment(write_experiment("bad_key", text));
+        load_experiment(write_experiment("bad_key", text), builtin_methods());
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("training.epoch"), std::string::npos) << e.what();
@@ -81,7 +82,7 @@ TEST(Experiment, RejectsBadKeysByName)
     text = kTiny;
     text.replace(text.find("\"ours\", \"sup\""), 13, "\"ours\", \"nope\"");
     try {
-        load_experiment(write_experiment("bad_ablation", text));
+        load_experiment(write_experiment("bad_ablation", text), builtin_methods());
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos) << e.what();
@@ -90,7 +91,7 @@ TEST(Experiment, RejectsBadKeysByName)
     text = kTiny;
     text.replace(text.find("method = \"linear_pca\""), 21, "method = \"linear_pca\"\nepochs = 3");
     try {
-        load_experiment(write_experiment("pca_training_key", text));
+        load_experiment(write_experiment("pca_training_key", text), builtin_methods());
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("epochs"), std::string::npos) << e.what();
@@ -98,7 +99,7 @@ TEST(Experiment, RejectsBadKeysByName)
     text = kTiny;
     text.replace(text.find("method = \"linear_pca\""), 21, "method = \"cubature\"");
     try {
-        load_experiment(write_experiment("bad_method", text));
+        load_experiment(write_experiment("bad_method", text), builtin_methods());
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("cubature"), std::string::npos) << e.what();
@@ -109,7 +110,7 @@ TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
 {
     set_log_level(LogLevel::Quiet);
     const std::string path = write_experiment("cache", kTiny);
-    const ExperimentConfig ex = load_experiment(path);
+    const ExperimentConfig ex = load_experiment(path, builtin_methods());
     RunOptions options;
     options.output_dir = fs::path(path).parent_path().string() + "/run";
     const RunResult first = run_experiment(ex, options);

@@ -1,0 +1,195 @@
+// methods, fit, rollout, evaluate: every method through the registry.
+#include <cstdio>
+#include <filesystem>
+
+#include "baselines/builtin_methods.hpp"
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "core/parse.hpp"
+#include "eval/rollout.hpp"
+#include "io/hdf5.hpp"
+#include "latent/autoencoder.hpp"
+#include "methods/artefact.hpp"
+#include "paper/scene_defaults.hpp"
+#include "scene/scene.hpp"
+
+namespace lb::cli {
+
+std::vector<Index> parse_hidden_option(const std::string& text)
+{
+    const auto widths = parse_positive_list(text);
+    if (!widths || widths->empty())
+        throw ConfigError("--hidden: expected comma-separated positive widths such as 256,256,256 (got '" + text + "')");
+    return *widths;
+}
+
+namespace {
+
+/// `--set key=value` pairs as TOML text: a value that is not TOML (a bare word) is
+/// taken as a string, so `--set loss=supervised_l2` and `--set hidden=[64,64]` both work.
+std::string options_from_pairs(const std::vector<std::string>& pairs)
+{
+    std::string text;
+    for (const std::string& pair : pairs) {
+        const size_t eq = pair.find('=');
+        if (eq == std::string::npos || eq == 0)
+            throw ConfigError("--set: expected key=value (got '" + pair + "')");
+        const std::string key = pair.substr(0, eq), value = pair.substr(eq + 1);
+        const std::string line = key + " = " + value + "\n";
+        try {
+            parse_toml(line, "--set");
+            text += line;
+        } catch (const ConfigError&) {
+            text += key + " = \"" + value + "\"\n";
+            parse_toml(text, "--set " + pair);  // a bad key still fails, naming the pair
+        }
+    }
+    return text;
+}
+
+/// The inputs a method gets from the command line for a dataset.
+MethodInputs command_line_inputs(const Dataset& data, const PhysicsModel& model, const Method& method,
+                                 const std::string& ae_path, const std::string& what)
+{
+    MethodInputs in;
+    in.data = &data;
+    in.model = &model;
+    in.progress = log_level() >= LogLevel::Info;
+    if (method.needs_autoencoder()) {
+        if (ae_path.empty())
+            throw ConfigError(what + ": --ae is required for method '" + method.method_name() + "'");
+        in.autoencoder = std::make_shared<Autoencoder>(Autoencoder::load(ae_path, data.physics));
+    }
+    // The reference simulator uses the scene's own Newton settings, stored in the dataset.
+    if (!method.has_artefact()) in.newton = load_scene_from_string(data.scene_toml, "dataset scene", ".").newton;
+    return in;
+}
+
+Index scene_latent(const MethodInputs& in, const Dataset& data)
+{
+    return in.autoencoder ? in.autoencoder->latent_dim() : default_latent_dim(data.scene_name);
+}
+
+} // namespace
+
+void register_methods(CLI::App& app)
+{
+    CLI::App* cmd = app.add_subcommand("methods", "List the methods this build can fit and roll out");
+    cmd->callback([] {
+        for (const MethodFactory& f : builtin_methods().all()) std::printf("%-16s %s\n", f.name.c_str(), f.description.c_str());
+    });
+}
+
+void register_fit(CLI::App& app)
+{
+    struct Args {
+        std::string method, data, ae, output, checkpoint;
+        std::vector<std::string> set;
+    };
+    auto a = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("fit", "Fit a method (train or precompute) on a dataset's training frames");
+    cmd->add_option("data", a->data, "Dataset HDF5 from `simulate`")->required();
+    cmd->add_option("--method", a->method, "Method name (`latentbench methods` lists them)")->required();
+    cmd->add_option("--ae", a->ae, "Autoencoder HDF5 from `train-ae` (methods in latent space)");
+    cmd->add_option("-o,--output", a->output, "Output artefact HDF5")->required();
+    cmd->add_option("--set", a->set, "Method option key=value, as in an [[integrators]] entry (repeatable)");
+    cmd->add_option("--checkpoint", a->checkpoint, "Training checkpoint (resumed only if it matches)");
+    cmd->callback([a] {
+        const MethodRegistry& registry = builtin_methods();
+        std::unique_ptr<Method> method = registry.parse_text(a->method, options_from_pairs(a->set), "--set");
+        if (!method->has_artefact()) throw ConfigError("fit: method '" + a->method + "' has nothing to fit");
+        const Dataset data = load_dataset(a->data);
+        const PhysicsModel model(data.physics);
+        MethodInputs in = command_line_inputs(data, model, *method, a->ae, "fit");
+        in.checkpoint_path = a->checkpoint;
+        method->resolve({data.scene_name, scene_latent(in, data)});
+        fit_artefact(*method, in, data.scene_name, a->output, method->options_text());
+        std::printf("wrote %s: %s (%s)\n", a->output.c_str(), method->method_name().c_str(), method->summary().c_str());
+    });
+}
+
+void print_summary_header()
+{
+    std::printf("%-18s %-22s %6s %8s %10s %10s %10s %8s %10s %9s %9s\n", "method", "sequence", "frames", "stable",
+                "final_rmse", "mean_rmse", "max_bc_m", "ke_ratio", "residual", "sted", "total_ms");
+}
+
+void print_summary(const std::string& method, const std::string& sequence, const RolloutSummary& s)
+{
+    std::printf("%-18s %-22s %6d %8d %10.4g %10.4g %10.4g %8.3f %10.4g %9.4g %9.4f\n", method.c_str(), sequence.c_str(),
+                s.frames, s.stable_horizon, s.final_rmse, s.mean_rmse, s.max_bc_violation, s.ke_ratio, s.mean_residual,
+                s.sted, s.total_ms);
+}
+
+void register_rollout(CLI::App& app)
+{
+    struct Args {
+        std::string data, ae, integrator, method, output, name, sequences = "test";
+        int frames = 0;
+        bool no_positions = false;
+    };
+    auto a = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("rollout", "Roll out a fitted method on a dataset's sequences and measure it");
+    cmd->add_option("data", a->data, "Dataset HDF5")->required();
+    cmd->add_option("--integrator", a->integrator, "Artefact HDF5 from `fit` (it names its method and options)");
+    cmd->add_option("--method", a->method, "A method with nothing to fit instead of --integrator (full_space)");
+    cmd->add_option("--ae", a->ae, "Autoencoder HDF5 (methods in latent space)");
+    cmd->add_option("-o,--output", a->output, "Output rollout HDF5 (metrics per frame and summaries)")->required();
+    cmd->add_option("--name", a->name, "Method label in tables (default: the artefact's file name)");
+    cmd->add_option("--sequences", a->sequences, "test (default: sequences with frames beyond training), all, or a name");
+    cmd->add_option("--frames", a->frames, "Roll out at most this many frames");
+    cmd->add_flag("--no-positions", a->no_positions, "Do not store the rolled-out positions");
+    cmd->callback([a] {
+        if (a->integrator.empty() == a->method.empty())
+            throw ConfigError("rollout: give either --integrator FILE (from `fit`) or --method NAME (nothing to fit)");
+        const MethodRegistry& registry = builtin_methods();
+        const Dataset data = load_dataset(a->data);
+        const PhysicsModel model(data.physics);
+        std::unique_ptr<h5::File> artefact;
+        std::unique_ptr<Method> method;
+        if (!a->integrator.empty()) {
+            artefact = std::make_unique<h5::File>(h5::File::open(a->integrator));
+            method = method_from_artefact(registry, *artefact);
+        } else {
+            method = registry.parse_text(a->method, "", "--method");
+            if (method->has_artefact())
+                throw ConfigError("rollout: method '" + a->method + "' needs an artefact: fit it, then pass --integrator");
+        }
+        const MethodInputs in = command_line_inputs(data, model, *method, a->ae, "rollout");
+        method->resolve({data.scene_name, scene_latent(in, data)});
+        const std::string label = !a->name.empty()       ? a->name
+                                  : !a->integrator.empty() ? std::filesystem::path(a->integrator).stem().string()
+                                                           : a->method;
+        const std::unique_ptr<Integrator> integrator = method->load(in, artefact.get(), label);
+        std::vector<RolloutResult> results;
+        RolloutOptions options;
+        options.max_frames = a->frames;
+        options.keep_positions = !a->no_positions;
+        options.progress = log_level() >= LogLevel::Info;
+        for (size_t k : select_sequences(data, a->sequences)) {
+            results.push_back(rollout(*integrator, model, data.sequences[k], options));
+        }
+        save_rollouts(results, a->output, data.scene_toml);
+        print_summary_header();
+        for (const auto& r : results) print_summary(r.method, r.sequence, r.summary);
+        const std::string line = method->after_rollout(*integrator);
+        if (!line.empty()) std::printf("%s: %s\n", method->method_name().c_str(), line.c_str());
+        std::printf("wrote %s\n", a->output.c_str());
+    });
+}
+
+void register_evaluate(CLI::App& app)
+{
+    auto files = std::make_shared<std::vector<std::string>>();
+    CLI::App* cmd = app.add_subcommand("evaluate", "Print the summary table of one or more rollout files");
+    cmd->add_option("rollouts", *files, "Rollout HDF5 files from `rollout`")->required();
+    cmd->callback([files] {
+        print_summary_header();
+        for (const auto& path : *files) {
+            for (const RolloutRecord& r : load_rollout_summaries(path)) print_summary(r.method, r.sequence, r.summary);
+        }
+    });
+}
+
+} // namespace lb::cli

@@ -1,0 +1,162 @@
+#include "methods/latent_mlp/latent_mlp_method.hpp"
+
+#include "core/log.hpp"
+#include "integrators/trainer.hpp"
+#include "io/hdf5.hpp"
+#include "paper/scene_defaults.hpp"
+
+namespace lb {
+
+namespace {
+
+std::vector<Index> read_widths(ConfigTable& t, const std::string& key, const std::vector<Index>& fallback)
+{
+    if (!t.has(key)) return fallback;
+    const std::vector<long long> w = t.get_int_array(key, {});
+    if (w.empty()) t.fail(key, "needs at least one width");
+    std::vector<Index> out;
+    for (long long v : w) {
+        if (v <= 0) t.fail(key, "widths must be positive");
+        out.push_back(Index(v));
+    }
+    return out;
+}
+
+/// The training keys, valid in [training], [scenes.training] and the entry itself.
+void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given)
+{
+    if (t.has("hidden")) {
+        o.hidden = read_widths(t, "hidden", o.hidden);
+        hidden_given = true;
+    }
+    o.epochs = int(t.get_int("epochs", o.epochs));
+    o.batch_size = int(t.get_int("batch", o.batch_size));
+    o.learning_rate = t.get_double("learning_rate", o.learning_rate);
+    o.max_seconds = t.get_double("max_seconds", o.max_seconds);
+    o.noise_fraction = t.get_double("noise_fraction", o.noise_fraction);
+    o.balancing_floor = t.get_double("balancing_floor", o.balancing_floor);
+    o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
+    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed));
+    if (o.epochs < 1) t.fail("epochs", "must be at least 1");
+    if (o.batch_size < 1) t.fail("batch", "must be at least 1");
+    if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");
+    if (o.max_seconds < 0.0) t.fail("max_seconds", "must be non-negative");
+    if (o.noise_fraction < 0.0) t.fail("noise_fraction", "must be non-negative");
+    if (!(o.balancing_floor >= 0.0)) t.fail("balancing_floor", "must be non-negative");
+    if (!(o.penalty_weight > 0.0)) t.fail("penalty_weight", "must be positive");
+}
+
+std::string widths_text(const std::vector<Index>& w)
+{
+    std::string s;
+    for (size_t i = 0; i < w.size(); ++i) s += (i ? ", " : "") + std::to_string(w[i]);
+    return s;
+}
+
+class LatentMlpMethod final : public Method {
+public:
+    LatentMlpMethod(IntegratorTrainOptions options, bool hidden_given)
+        : m_options(std::move(options)), m_hidden_given(hidden_given)
+    {
+    }
+
+    std::string method_name() const override { return "latent_mlp"; }
+
+    void resolve(const MethodScene& scene) override
+    {
+        if (!m_hidden_given) m_options.hidden = default_integrator_hidden(scene.scene_name);
+        m_hidden_given = true;
+    }
+
+    std::string options_text() const override
+    {
+        const IntegratorTrainOptions& o = m_options;
+        toml::table t;
+        t.insert_or_assign("loss", to_string(o.loss));
+        toml::array hidden;
+        for (Index w : o.hidden) hidden.push_back((long long)w);
+        t.insert_or_assign("hidden", hidden);
+        t.insert_or_assign("epochs", (long long)o.epochs);
+        t.insert_or_assign("batch", (long long)o.batch_size);
+        t.insert_or_assign("learning_rate", o.learning_rate);
+        t.insert_or_assign("noise", o.training_noise);
+        t.insert_or_assign("noise_fraction", o.noise_fraction);
+        t.insert_or_assign("balancing", o.data_balancing);
+        t.insert_or_assign("balancing_floor", o.balancing_floor);
+        t.insert_or_assign("penalty_weight", o.penalty_weight);
+        t.insert_or_assign("seed", (long long)o.seed);
+        t.insert_or_assign("max_seconds", o.max_seconds);
+        return to_toml_string(t);
+    }
+
+    std::string summary() const override
+    {
+        if (m_options.loss == IntegratorLoss::SupervisedL2) return "supervised_l2";
+        return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", balancing " +
+               (m_options.data_balancing ? "on" : "off");
+    }
+    std::string layers() const override { return widths_text(m_options.hidden); }
+    bool needs_autoencoder() const override { return true; }
+    bool is_paper_method() const override { return m_options.loss == IntegratorLoss::SelfSupervised; }
+
+    void fit(const MethodInputs& in, h5::File& out) const override
+    {
+        IntegratorTrainOptions o = m_options;
+        o.progress = in.progress;
+        o.checkpoint_path = in.checkpoint_path;
+        o.resume = in.resume;
+        Autoencoder& ae = *in.autoencoder;
+        const TrainingSamples samples = make_training_samples(ae, *in.data);
+        log_info("training latent_mlp (%s) on %ld samples", o.describe().c_str(), long(samples.size()));
+        LatentMlpModel net = LatentMlpModel::create(ae.latent_dim(), samples.p.rows(), o.hidden, o.seed);
+        IntegratorTrainer trainer(*in.model, ae, o);
+        const IntegratorTrainSummary s = trainer.train(net, samples);
+        net.save(out, "integrator.");
+        out.set_attribute("/", "epochs_run", (long long)s.epochs_run);
+        out.set_attribute("/", "final_loss", s.final_loss);
+        out.set_attribute("/", "train_seconds", s.seconds);
+        out.set_attribute("/", "resumed", (long long)s.resumed);
+        log_info("latent_mlp: %d epochs, final loss %.6g, %.1f s%s%s", s.epochs_run, s.final_loss, s.seconds,
+                 s.resumed ? " (resumed from a checkpoint)" : "", s.time_limited ? " (time limit)" : "");
+    }
+
+    std::unique_ptr<Integrator> load(const MethodInputs& in, const h5::File* artefact,
+                                     const std::string& label) const override
+    {
+        return std::make_unique<LatentMlpIntegrator>(label, in.autoencoder, LatentMlpModel::load(*artefact, "integrator."));
+    }
+
+private:
+    IntegratorTrainOptions m_options;
+    bool m_hidden_given = false;
+};
+
+std::unique_ptr<Method> parse_latent_mlp(ConfigTable& entry, ConfigTable& defaults)
+{
+    IntegratorTrainOptions o;
+    bool hidden_given = false;
+    read_training(defaults, o, hidden_given);
+    const std::string loss = entry.get_string("loss", to_string(o.loss));
+    if (loss != "self_supervised" && loss != "supervised_l2")
+        entry.fail("loss", "unknown loss '" + loss + "' (self_supervised or supervised_l2)");
+    o.loss = integrator_loss_from_string(loss);
+    o.training_noise = entry.get_bool("noise", o.training_noise);
+    o.data_balancing = entry.get_bool("balancing", o.data_balancing);
+    read_training(entry, o, hidden_given);
+    entry.finish();
+    return std::make_unique<LatentMlpMethod>(o, hidden_given);
+}
+
+} // namespace
+
+MethodFactory latent_mlp_method()
+{
+    MethodFactory f;
+    f.name = "latent_mlp";
+    f.description = "Li et al. 2025: an MLP integrator in the autoencoder's latent space (loss = self_supervised | supervised_l2)";
+    f.parse = parse_latent_mlp;
+    f.quick_options = "epochs = 3\nbatch = 64\nhidden = [16]\nlearning_rate = 1.0e-3\n";
+    return f;
+}
+
+} // namespace lb

@@ -1,0 +1,169 @@
+#include "lb_paths.hpp"
+
+#include <filesystem>
+
+#include "io/toml_config.hpp"
+#include "pipeline/experiment.hpp"
+
+namespace lb {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string resolve(const std::string& path, const std::string& base)
+{
+    if (fs::path(path).is_absolute()) return path;
+    if (fs::exists(fs::path(base) / path)) return (fs::path(base) / path).string();
+    return (fs::path(LB_SOURCE_DIR) / path).string();
+}
+
+std::vector<Index> widths(ConfigTable& t, const std::string& key, const std::vector<Index>& fallback)
+{
+    if (!t.has(key)) return fallback;
+    const std::vector<long long> w = t.get_int_array(key, {});
+    if (w.empty()) t.fail(key, "needs at least one width");
+    std::vector<Index> out;
+    for (long long v : w) {
+        if (v <= 0) t.fail(key, "widths must be positive");
+        out.push_back(Index(v));
+    }
+    return out;
+}
+
+void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
+{
+    if (t.has("latent")) {
+        o.latent_dim = Index(t.get_int("latent", 0));
+        latent_given = true;
+        if (o.latent_dim < 1) t.fail("latent", "must be at least 1");
+    }
+    o.hidden = widths(t, "hidden", o.hidden);
+    o.pca_dim = Index(t.get_int("pca", o.pca_dim));
+    o.epochs = int(t.get_int("epochs", o.epochs));
+    o.batch_size = int(t.get_int("batch", o.batch_size));
+    o.learning_rate = t.get_double("learning_rate", o.learning_rate);
+    o.patience = int(t.get_int("patience", o.patience));
+    o.validation_fraction = t.get_double("validation", o.validation_fraction);
+    o.batch_norm = t.get_bool("batch_norm", o.batch_norm);
+    o.residual = t.get_bool("residual", o.residual);
+    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed));
+    if (o.epochs < 1) t.fail("epochs", "must be at least 1");
+    if (o.batch_size < 2) t.fail("batch", "must be at least 2 (BatchNorm)");
+    if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");
+    if (o.pca_dim < 0) t.fail("pca", "must be non-negative");
+    if (!(o.validation_fraction > 0.0 && o.validation_fraction < 1.0)) t.fail("validation", "must lie in (0, 1)");
+    t.finish();
+}
+
+/// The [[integrators]] entries, checked once for names (the methods parse them per scene).
+std::vector<ConfigTable> method_entries(ConfigTable& cfg, std::set<std::string>& names)
+{
+    std::vector<ConfigTable> entries = cfg.table_array("integrators");
+    if (entries.empty()) cfg.fail("integrators", "at least one [[integrators]] entry is required");
+    for (ConfigTable& t : entries) {
+        const std::string name = t.require_string("name");
+        if (name.empty() || name.find_first_of("/ \t") != std::string::npos) t.fail("name", "must be a non-empty word");
+        if (name == "full_space") t.fail("name", "'full_space' is reserved for the reference simulator");
+        if (!names.insert(name).second) t.fail("name", "duplicate integrator name '" + name + "'");
+    }
+    return entries;
+}
+
+/// One scene: its autoencoder settings and every method parsed over the merged
+/// [training] defaults (suite-wide, then the scene's [scenes.training]).
+SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOptions& ae_defaults,
+                     bool latent_default_given, const toml::table* training, const std::vector<ConfigTable>& entries,
+                     const MethodRegistry& registry, const std::string& source)
+{
+    SceneSpec sc;
+    sc.scene_path = resolve(s.require_string("scene"), base);
+    if (!fs::exists(sc.scene_path)) s.fail("scene", "file '" + sc.scene_path + "' does not exist");
+    sc.variant = s.get_string("variant", "");
+    sc.label = s.get_string("label", fs::path(sc.scene_path).stem().string() + (sc.variant.empty() ? "" : "_" + sc.variant));
+    sc.autoencoder = ae_defaults;
+    sc.latent_given = latent_default_given;
+    if (auto t = s.table("autoencoder")) read_autoencoder(*t, sc.autoencoder, sc.latent_given);
+    toml::table merged = training ? *training : toml::table{};
+    std::optional<ConfigTable> scene_training = s.table("training");
+    if (scene_training) {
+        scene_training->accept_all();
+        merge_toml(merged, *s.raw_table("training"));
+    }
+    ConfigTable defaults(merged, scene_training ? "scenes.training" : "training", source);
+    for (ConfigTable entry : entries) {
+        MethodSpec m;
+        m.name = entry.require_string("name");
+        m.method = registry.parse(entry, defaults);
+        sc.methods.push_back(std::move(m));
+    }
+    defaults.finish();  // a [training] key that no method reads is a typo
+    s.finish();
+    return sc;
+}
+
+AblationSpec read_ablation(ConfigTable a, const std::set<std::string>& names)
+{
+    AblationSpec ab;
+    ab.name = a.require_string("name");
+    ab.title = a.get_string("title", ab.name);
+    ab.methods = a.get_string_array("methods", {});
+    for (const auto& m : ab.methods) {
+        if (!names.count(m)) a.fail("methods", "unknown integrator '" + m + "'");
+    }
+    if (ab.methods.size() < 2) a.fail("methods", "an ablation compares at least two integrators");
+    a.finish();
+    return ab;
+}
+
+} // namespace
+
+const std::vector<std::string>& experiment_stages()
+{
+    static const std::vector<std::string> stages{"simulate", "autoencoder", "integrators", "rollouts", "tables", "plots"};
+    return stages;
+}
+
+ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry)
+{
+    const toml::table root = parse_toml_file(path);
+    ConfigTable cfg(root, "", path);
+    const std::string base = fs::path(path).parent_path().string();
+    ExperimentConfig ex;
+    ex.source = path;
+    ex.toml_text = to_toml_string(root);
+    ex.name = cfg.require_string("name");
+    ex.description = cfg.get_string("description", "");
+    ex.output_dir = cfg.get_string("output_dir", "runs/" + ex.name);
+    ex.threads = int(cfg.get_int("threads", 0));
+
+    AutoencoderOptions ae_defaults;
+    bool latent_default_given = false;
+    if (auto t = cfg.table("autoencoder")) read_autoencoder(*t, ae_defaults, latent_default_given);
+    if (auto t = cfg.table("training")) t->accept_all();  // read by the methods, checked per scene
+    std::set<std::string> names;
+    const std::vector<ConfigTable> entries = method_entries(cfg, names);
+    for (ConfigTable s : cfg.table_array("scenes")) {
+        ex.scenes.push_back(read_scene(s, base, ae_defaults, latent_default_given, cfg.raw_table("training"), entries,
+                                       registry, path));
+    }
+    if (ex.scenes.empty()) cfg.fail("scenes", "at least one [[scenes]] entry is required");
+
+    if (auto t = cfg.table("evaluation")) {
+        ex.sequences = t->get_string("sequences", ex.sequences);
+        ex.rollout_frames = int(t->get_int("frames", 0));
+        ex.full_space = t->get_bool("full_space", ex.full_space);
+        if (ex.rollout_frames < 0) t->fail("frames", "must be non-negative");
+        t->finish();
+    }
+    if (auto t = cfg.table("outputs")) {
+        ex.plots = t->get_bool("plots", ex.plots);
+        ex.filmstrips = t->get_bool("filmstrips", ex.filmstrips);
+        ex.paper_tables = t->get_bool("paper_tables", ex.paper_tables);
+        t->finish();
+    }
+    for (ConfigTable a : cfg.table_array("ablations")) ex.ablations.push_back(read_ablation(a, names));
+    cfg.finish();
+    return ex;
+}
+
+} // namespace lb

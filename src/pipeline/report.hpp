@@ -1,0 +1,41 @@
+#pragma once
+// Tables of a suite, rebuilt from the rollout files every run (cheap): one
+// comparison per scene, one per ablation and scene, and the paper's Tables 1 and 2
+// with our measurements beside the published figures.
+#include <string>
+#include <vector>
+
+#include "eval/metrics.hpp"
+#include "pipeline/experiment.hpp"
+
+namespace lb {
+
+/// What the tables need of one method on one scene.
+struct MethodResult {
+    std::string name;     ///< label in tables
+    std::string method;   ///< registered method name
+    std::string summary;  ///< Method::summary()
+    std::string layers;   ///< Method::layers()
+    bool paper_method = false;
+    std::string rollout_file;
+    std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence
+};
+
+struct SceneResult {
+    std::string label;
+    std::string dataset_file;
+    std::string scene_name;
+    Index dofs = 0;
+    Index latent = 0;
+    int train_frames = 0;
+    double full_space_ms = 0.0;  ///< median Newton step of the dataset
+    double jvp_ms = 0.0;         ///< one-vertex JVP through the decoder (float)
+    std::string decoder_layers;
+    std::vector<MethodResult> methods;
+};
+
+/// Write every table (Markdown, CSV, LaTeX) into `dir`; returns the Markdown paths.
+std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes,
+                                      const std::string& dir);
+
+} // namespace lb
