@@ -351,30 +351,7 @@ double measure_jvp_ms(Autoencoder& ae)
     return 1e3 * median_of(times);
 }
 
-RolloutSummary mean_summary(const std::vector<RolloutSummary>& all)
-{
-    // Over sequences: worst stable horizon fraction is reported by the tables per
-    // sequence; here the plain means for the one-row-per-method tables.
-    RolloutSummary m;
-    if (all.empty()) return m;
-    m.stable_horizon = all.front().stable_horizon;
-    m.frames = all.front().frames;
-    for (const auto& s : all) {
-        m.stable_horizon = std::min(m.stable_horizon, s.stable_horizon);
-        m.frames = std::min(m.frames, s.frames);
-        m.final_rmse += s.final_rmse / double(all.size());
-        m.mean_rmse += s.mean_rmse / double(all.size());
-        m.max_bc_violation = std::max(m.max_bc_violation, s.max_bc_violation);
-        m.ke_ratio += s.ke_ratio / double(all.size());
-        m.mean_residual += s.mean_residual / double(all.size());
-        m.m_rms += s.m_rms / double(all.size());
-        m.sted += s.sted / double(all.size());
-        m.integrate_ms += s.integrate_ms / double(all.size());
-        m.decode_ms += s.decode_ms / double(all.size());
-        m.total_ms += s.total_ms / double(all.size());
-    }
-    return m;
-}
+RolloutSummary mean_summary(const std::vector<RolloutSummary>& all) { return aggregate(all); }
 
 TableCell number(double v, int digits = 3)
 {
@@ -390,8 +367,8 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
                 "), from the first two ground-truth frames. Stable = frames before a NaN, RMSE > 0.5 or boundary "
                 "violation > 0.1 (relative to the bounding-box diagonal); RMSE relative to the same diagonal; "
                 "residual = ||∇E|| on free DOFs / force scale; times are medians per frame.";
-    t.columns = {"method", "loss", "noise", "balancing", "stable / frames", "final RMSE", "mean RMSE",
-                 "max BC viol. (m)", "KE ratio", "residual", "STED", "integrate (ms)", "decode (ms)", "total (ms)"};
+    t.columns = {"method", "loss", "noise", "balancing"};
+    for (const auto& title : summary_table_columns()) t.columns.push_back(title);
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
         const RolloutSummary s = mean_summary(m.summaries);
@@ -399,12 +376,10 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
         const std::string loss = m.kind == MethodKind::LinearPca ? "— (linear PCA, d = " + std::to_string(m.linear_pca_dim) + ")"
                                  : untrained                     ? "—"
                                                                  : to_string(m.options.loss);
-        t.add_row({m.name, loss, untrained ? "—" : (m.options.training_noise ? "on" : "off"),
-                   untrained ? "—" : (m.options.data_balancing ? "on" : "off"),
-                   TableCell(std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames), double(s.stable_horizon)),
-                   number(s.final_rmse), number(s.mean_rmse), number(s.max_bc_violation), number(s.ke_ratio),
-                   number(s.mean_residual), number(s.sted), number(s.integrate_ms), number(s.decode_ms),
-                   number(s.total_ms)});
+        std::vector<TableCell> cells{m.name, loss, untrained ? "—" : (m.options.training_noise ? "on" : "off"),
+                                     untrained ? "—" : (m.options.data_balancing ? "on" : "off")};
+        for (auto& c : summary_table_cells(s)) cells.push_back(std::move(c));
+        t.add_row(std::move(cells));
     }
     t.add_note("training horizon: " + std::to_string(r.train_frames) + " frames per sequence");
     t.add_provenance();
