@@ -8,6 +8,7 @@
 #include "core/log.hpp"
 #include "core/parse.hpp"
 #include "eval/rollout.hpp"
+#include "eval/summary_schema.hpp"
 #include "io/hdf5.hpp"
 #include "latent/autoencoder.hpp"
 #include "methods/artefact.hpp"
@@ -109,17 +110,11 @@ void register_fit(CLI::App& app)
     });
 }
 
-void print_summary_header()
-{
-    std::printf("%-18s %-22s %6s %8s %10s %10s %10s %8s %10s %9s %9s\n", "method", "sequence", "frames", "stable",
-                "final_rmse", "mean_rmse", "max_bc_m", "ke_ratio", "residual", "sted", "total_ms");
-}
+static void print_summary_header() { std::printf("%s\n", format_summary_header().c_str()); }
 
-void print_summary(const std::string& method, const std::string& sequence, const RolloutSummary& s)
+static void print_summary(const std::string& method, const std::string& sequence, const RolloutSummary& s)
 {
-    std::printf("%-18s %-22s %6d %8d %10.4g %10.4g %10.4g %8.3f %10.4g %9.4g %9.4f\n", method.c_str(), sequence.c_str(),
-                s.frames, s.stable_horizon, s.final_rmse, s.mean_rmse, s.max_bc_violation, s.ke_ratio, s.mean_residual,
-                s.sted, s.total_ms);
+    std::printf("%s\n", format_summary_row(method, sequence, s).c_str());
 }
 
 void register_rollout(CLI::App& app)

@@ -6,11 +6,23 @@
 
 namespace lb {
 
+const std::vector<MetricColumnInfo>& metric_columns()
+{
+    static const std::vector<MetricColumnInfo> columns{
+#define LB_METRIC_COLUMN_INFO(id, name, unit) {name, unit},
+        LB_METRIC_COLUMNS(LB_METRIC_COLUMN_INFO)
+#undef LB_METRIC_COLUMN_INFO
+    };
+    return columns;
+}
+
 const std::vector<std::string>& metric_column_names()
 {
-    static const std::vector<std::string> names{"rmse",     "bc_violation", "kinetic",       "kinetic_gt",
-                                                "elastic",  "elastic_gt",   "residual",      "sted_spatial",
-                                                "sted_temporal", "integrate_seconds", "decode_seconds"};
+    static const std::vector<std::string> names = [] {
+        std::vector<std::string> out;
+        for (const auto& c : metric_columns()) out.emplace_back(c.name);
+        return out;
+    }();
     return names;
 }
 

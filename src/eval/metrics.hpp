@@ -12,30 +12,46 @@
 //                 to the speed of one mean rest edge length per step
 //   STED = sted_spatial + 0.5 · sted_temporal  (the weighting of Vasa & Skala 2011's
 //   spatial and temporal terms; our terms are simplified: global, not per-vertex-neighbourhood)
-// Summaries: stable horizon = frames until a non-finite state, rmse > 0.5 or
-// bc_violation / L > 0.1; M_rms = RMS vertex error over all frames (m, unscaled);
+// Summaries (RolloutSummary; the list of them is eval/summary_schema.hpp):
+// stable horizon = frames until a non-finite state, rmse > 0.5 or bc_violation / L > 0.1; M_rms = RMS vertex error over all frames (m, unscaled);
 // KE ratio = Σ_t KE_pred / Σ_t KE_gt.
 #include <string>
 #include <vector>
 
+#include "eval/summary_schema.hpp"
 #include "sim/physics_model.hpp"
 
 namespace lb {
 
+// Per-frame metric columns, one line each: enumerator, HDF5/CSV name, unit ("" if
+// dimensionless). To add a column, add one line here and fill it in frame_metrics().
+// clang-format off
+#define LB_METRIC_COLUMNS(X)                            \
+    X(kRmse,             "rmse",              "")       \
+    X(kBcViolation,      "bc_violation",      "m")      \
+    X(kKinetic,          "kinetic",           "J")      \
+    X(kKineticGt,        "kinetic_gt",        "J")      \
+    X(kElastic,          "elastic",           "J")      \
+    X(kElasticGt,        "elastic_gt",        "J")      \
+    X(kResidual,         "residual",          "")       \
+    X(kStedSpatial,      "sted_spatial",      "")       \
+    X(kStedTemporal,     "sted_temporal",     "")       \
+    X(kIntegrateSeconds, "integrate_seconds", "s")      \
+    X(kDecodeSeconds,    "decode_seconds",    "s")
+// clang-format on
+
 enum MetricColumn {
-    kRmse = 0,
-    kBcViolation,
-    kKinetic,
-    kKineticGt,
-    kElastic,
-    kElasticGt,
-    kResidual,
-    kStedSpatial,
-    kStedTemporal,
-    kIntegrateSeconds,
-    kDecodeSeconds,
+#define LB_METRIC_COLUMN_ENUM(id, name, unit) id,
+    LB_METRIC_COLUMNS(LB_METRIC_COLUMN_ENUM)
+#undef LB_METRIC_COLUMN_ENUM
     kNumMetricColumns
 };
+struct MetricColumnInfo {
+    const char* name;  ///< as written to HDF5/CSV
+    const char* unit;  ///< "" if dimensionless
+};
+/// Every per-frame column, indexed by MetricColumn.
+const std::vector<MetricColumnInfo>& metric_columns();
 /// Column names as written to HDF5/CSV.
 const std::vector<std::string>& metric_column_names();
 
@@ -62,21 +78,6 @@ private:
     VectorXi m_free;                   ///< free DOF indices
     MatrixXi m_edges;                  ///< unique mesh edges (E×2)
     double m_mean_edge = 1.0;
-};
-
-struct RolloutSummary {
-    int frames = 0;
-    int stable_horizon = 0;
-    double final_rmse = 0.0;
-    double mean_rmse = 0.0;
-    double max_bc_violation = 0.0;  ///< m
-    double ke_ratio = 0.0;
-    double mean_residual = 0.0;
-    double m_rms = 0.0;  ///< m
-    double sted = 0.0;
-    double integrate_ms = 0.0;  ///< median per frame after warm-up
-    double decode_ms = 0.0;
-    double total_ms = 0.0;
 };
 
 /// Summarise a T × kNumMetricColumns table (frames 0, 1 are the given start frames).

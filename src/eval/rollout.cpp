@@ -74,19 +74,7 @@ void save_rollouts(const std::vector<RolloutResult>& results, const std::string&
             }
             f.set_attribute(g, "method", r.method);
             f.set_attribute(g, "sequence", r.sequence);
-            const RolloutSummary& s = r.summary;
-            f.set_attribute(g, "frames", (long long)s.frames);
-            f.set_attribute(g, "stable_horizon", (long long)s.stable_horizon);
-            f.set_attribute(g, "final_rmse", s.final_rmse);
-            f.set_attribute(g, "mean_rmse", s.mean_rmse);
-            f.set_attribute(g, "max_bc_violation", s.max_bc_violation);
-            f.set_attribute(g, "ke_ratio", s.ke_ratio);
-            f.set_attribute(g, "mean_residual", s.mean_residual);
-            f.set_attribute(g, "m_rms", s.m_rms);
-            f.set_attribute(g, "sted", s.sted);
-            f.set_attribute(g, "integrate_ms", s.integrate_ms);
-            f.set_attribute(g, "decode_ms", s.decode_ms);
-            f.set_attribute(g, "total_ms", s.total_ms);
+            write_summary(f, g, r.summary);
         }
     }
     out.commit();
@@ -114,19 +102,7 @@ std::vector<RolloutRecord> load_rollout_summaries(const std::string& path)
         RolloutRecord r;
         r.method = f.attribute_string(g, "method");
         r.sequence = f.attribute_string(g, "sequence");
-        RolloutSummary& s = r.summary;
-        s.frames = int(f.attribute_int(g, "frames"));
-        s.stable_horizon = int(f.attribute_int(g, "stable_horizon"));
-        s.final_rmse = f.attribute_double(g, "final_rmse");
-        s.mean_rmse = f.attribute_double(g, "mean_rmse");
-        s.max_bc_violation = f.attribute_double(g, "max_bc_violation");
-        s.ke_ratio = f.attribute_double(g, "ke_ratio");
-        s.mean_residual = f.attribute_double(g, "mean_residual");
-        s.m_rms = f.attribute_double(g, "m_rms");
-        s.sted = f.attribute_double(g, "sted");
-        s.integrate_ms = f.attribute_double(g, "integrate_ms");
-        s.decode_ms = f.attribute_double(g, "decode_ms");
-        s.total_ms = f.attribute_double(g, "total_ms");
+        r.summary = read_summary(f, g);
         records.push_back(std::move(r));
     }
     return records;

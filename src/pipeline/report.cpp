@@ -4,37 +4,13 @@
 #include <cmath>
 #include <filesystem>
 
+#include "eval/summary_schema.hpp"
 #include "io/table.hpp"
 #include "paper/paper_numbers.hpp"
 
 namespace lb {
 
 namespace {
-
-RolloutSummary mean_summary(const std::vector<RolloutSummary>& all)
-{
-    // Over sequences: worst stable horizon fraction is reported by the tables per
-    // sequence; here the plain means for the one-row-per-method tables.
-    RolloutSummary m;
-    if (all.empty()) return m;
-    m.stable_horizon = all.front().stable_horizon;
-    m.frames = all.front().frames;
-    for (const auto& s : all) {
-        m.stable_horizon = std::min(m.stable_horizon, s.stable_horizon);
-        m.frames = std::min(m.frames, s.frames);
-        m.final_rmse += s.final_rmse / double(all.size());
-        m.mean_rmse += s.mean_rmse / double(all.size());
-        m.max_bc_violation = std::max(m.max_bc_violation, s.max_bc_violation);
-        m.ke_ratio += s.ke_ratio / double(all.size());
-        m.mean_residual += s.mean_residual / double(all.size());
-        m.m_rms += s.m_rms / double(all.size());
-        m.sted += s.sted / double(all.size());
-        m.integrate_ms += s.integrate_ms / double(all.size());
-        m.decode_ms += s.decode_ms / double(all.size());
-        m.total_ms += s.total_ms / double(all.size());
-    }
-    return m;
-}
 
 TableCell number(double v, int digits = 3)
 {
@@ -50,16 +26,13 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
                 "), from the first two ground-truth frames. Stable = frames before a NaN, RMSE > 0.5 or boundary "
                 "violation > 0.1 (relative to the bounding-box diagonal); RMSE relative to the same diagonal; "
                 "residual = ||∇E|| on free DOFs / force scale; times are medians per frame.";
-    t.columns = {"method", "configuration", "stable / frames", "final RMSE", "mean RMSE", "max BC viol. (m)",
-                 "KE ratio", "residual", "STED", "integrate (ms)", "decode (ms)", "total (ms)"};
+    t.columns = {"method", "configuration"};
+    for (const auto& title : summary_table_columns()) t.columns.push_back(title);
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
-        const RolloutSummary s = mean_summary(m.summaries);
-        t.add_row({m.name, m.summary,
-                   TableCell(std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames), double(s.stable_horizon)),
-                   number(s.final_rmse), number(s.mean_rmse), number(s.max_bc_violation), number(s.ke_ratio),
-                   number(s.mean_residual), number(s.sted), number(s.integrate_ms), number(s.decode_ms),
-                   number(s.total_ms)});
+        std::vector<TableCell> cells{m.name, m.summary};
+        for (auto& c : summary_table_cells(aggregate(m.summaries))) cells.push_back(std::move(c));
+        t.add_row(std::move(cells));
     }
     t.add_note("training horizon: " + std::to_string(r.train_frames) + " frames per sequence");
     t.add_provenance();
@@ -86,7 +59,7 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
     for (const SceneResult& r : scenes) {
         const auto ours = std::find_if(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return m.paper_method; });
         if (ours == r.methods.end()) continue;
-        const RolloutSummary s = mean_summary(ours->summaries);
+        const RolloutSummary s = aggregate(ours->summaries);
         const PaperTable1Row* p1 = find_paper_table1_row(r.scene_name);
         const PaperTable2Row* p2 = find_paper_table2_row(r.scene_name);
         t1.add_row({r.label, TableCell::integer(r.dofs), TableCell::integer(r.latent), number(r.full_space_ms, 4),

@@ -63,7 +63,7 @@ TEST(Experiment, EveryShippedSuiteIsValid)
         if (entry.path().extension() != ".toml") continue;
         const ExperimentConfig ex = load_experiment(entry.path().string(), builtin_methods());
         EXPECT_FALSE(ex.scenes.empty()) << entry.path();
-        EXPECT_FALSE(ex.scenes.front().integrators.empty()) << entry.path();
+        EXPECT_FALSE(ex.scenes.front().methods.empty()) << entry.path();
         ++count;
     }
     EXPECT_GE(count, 8);
