@@ -1,5 +1,7 @@
 #include "integrators/full_space_integrator.hpp"
 
+#include <limits>
+
 #include "core/error.hpp"
 #include "core/timer.hpp"
 
@@ -20,7 +22,12 @@ StepTiming FullSpaceIntegrator::step(const BoundaryState& bc)
     Timer timer;
     const MatrixX3d targets = Eigen::Map<const MatrixX3d>(bc.targets.data(), bc.targets.size() / 3, 3);
     m_summary = m_sim.step(m_x_prev, m_x_prev2, targets, m_x);
-    if (!m_summary.converged()) throw NumericalError("full-space step did not converge: " + m_summary.brief());
+    if (m_summary.termination == NewtonTermination::NonFinite) {
+        // A non-finite state (e.g. started from one) ends the rollout like any method's.
+        m_x.setConstant(std::numeric_limits<double>::quiet_NaN());
+    } else if (!m_summary.converged()) {
+        throw NumericalError("full-space step did not converge: " + m_summary.brief());
+    }
     m_x_prev2.swap(m_x_prev);
     m_x_prev = m_x;
     return {timer.seconds(), 0.0};
