@@ -20,4 +20,11 @@ std::optional<std::vector<Index>> parse_positive_list(const std::string& text)
     return values;
 }
 
+std::string format_list(const std::vector<Index>& values)
+{
+    std::string s;
+    for (size_t i = 0; i < values.size(); ++i) s += (i ? ", " : "") + std::to_string(values[i]);
+    return s;
+}
+
 } // namespace lb

@@ -202,6 +202,22 @@ std::optional<ConfigTable> ConfigTable::table(const std::string& key)
     return ConfigTable(*t, key_path(key), m_source);
 }
 
+std::vector<Index> ConfigTable::get_widths(const std::string& key, const std::vector<Index>& fallback)
+{
+    if (!has(key)) {
+        m_used.insert(key);
+        return fallback;
+    }
+    const std::vector<long long> w = get_int_array(key, {});
+    if (w.empty()) fail(key, "needs at least one width");
+    std::vector<Index> out;
+    for (long long v : w) {
+        if (v <= 0) fail(key, "widths must be positive");
+        out.push_back(Index(v));
+    }
+    return out;
+}
+
 void ConfigTable::accept_all()
 {
     for (const auto& [key, node] : *m_table) m_used.insert(std::string(key.str()));

@@ -37,6 +37,8 @@ public:
     std::vector<long long> get_int_array(const std::string& key, const std::vector<long long>& fallback);
     std::vector<std::string> get_string_array(const std::string& key,
                                               const std::vector<std::string>& fallback);
+    /// Layer widths: a non-empty array of positive integers (fallback if absent).
+    std::vector<Index> get_widths(const std::string& key, const std::vector<Index>& fallback);
 
     /// A sub-table; std::nullopt if absent.
     std::optional<ConfigTable> table(const std::string& key);

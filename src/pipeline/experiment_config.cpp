@@ -17,19 +17,6 @@ std::string resolve(const std::string& path, const std::string& base)
     return (fs::path(LB_SOURCE_DIR) / path).string();
 }
 
-std::vector<Index> widths(ConfigTable& t, const std::string& key, const std::vector<Index>& fallback)
-{
-    if (!t.has(key)) return fallback;
-    const std::vector<long long> w = t.get_int_array(key, {});
-    if (w.empty()) t.fail(key, "needs at least one width");
-    std::vector<Index> out;
-    for (long long v : w) {
-        if (v <= 0) t.fail(key, "widths must be positive");
-        out.push_back(Index(v));
-    }
-    return out;
-}
-
 void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
 {
     if (t.has("latent")) {
@@ -37,7 +24,7 @@ void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
         latent_given = true;
         if (o.latent_dim < 1) t.fail("latent", "must be at least 1");
     }
-    o.hidden = widths(t, "hidden", o.hidden);
+    o.hidden = t.get_widths("hidden", o.hidden);
     o.pca_dim = Index(t.get_int("pca", o.pca_dim));
     o.epochs = int(t.get_int("epochs", o.epochs));
     o.batch_size = int(t.get_int("batch", o.batch_size));

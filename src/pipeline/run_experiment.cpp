@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "core/log.hpp"
+#include "core/parse.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "eval/rollout.hpp"
@@ -24,18 +25,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string widths_text(const std::vector<Index>& w)
-{
-    std::string s;
-    for (size_t i = 0; i < w.size(); ++i) s += (i ? ", " : "") + std::to_string(w[i]);
-    return s;
-}
-
 /// Every resolved autoencoder option that changes the trained network.
 std::string autoencoder_key(const AutoencoderOptions& o)
 {
     std::ostringstream s;
-    s << o.latent_dim << "|" << widths_text(o.hidden) << "|" << o.pca_dim << "|" << o.batch_norm << o.residual << "|"
+    s << o.latent_dim << "|" << format_list(o.hidden) << "|" << o.pca_dim << "|" << o.batch_norm << o.residual << "|"
       << o.epochs << "|" << o.batch_size << "|" << o.learning_rate << "|" << o.validation_fraction << "|" << o.patience
       << "|" << o.seed;
     return s.str();
@@ -134,7 +128,7 @@ private:
                     });
         m_ae = std::make_shared<Autoencoder>(Autoencoder::load(file, m_data.physics));
         m_result.latent = m_ae->latent_dim();
-        m_result.decoder_layers = widths_text(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
+        m_result.decoder_layers = format_list(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
         m_result.jvp_ms = measure_jvp_ms(*m_ae);
     }
 

@@ -1,6 +1,7 @@
 #include "methods/latent_mlp/latent_mlp_method.hpp"
 
 #include "core/log.hpp"
+#include "core/parse.hpp"
 #include "integrators/trainer.hpp"
 #include "io/hdf5.hpp"
 #include "paper/scene_defaults.hpp"
@@ -9,24 +10,11 @@ namespace lb {
 
 namespace {
 
-std::vector<Index> read_widths(ConfigTable& t, const std::string& key, const std::vector<Index>& fallback)
-{
-    if (!t.has(key)) return fallback;
-    const std::vector<long long> w = t.get_int_array(key, {});
-    if (w.empty()) t.fail(key, "needs at least one width");
-    std::vector<Index> out;
-    for (long long v : w) {
-        if (v <= 0) t.fail(key, "widths must be positive");
-        out.push_back(Index(v));
-    }
-    return out;
-}
-
 /// The training keys, valid in [training], [scenes.training] and the entry itself.
 void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given)
 {
     if (t.has("hidden")) {
-        o.hidden = read_widths(t, "hidden", o.hidden);
+        o.hidden = t.get_widths("hidden", o.hidden);
         hidden_given = true;
     }
     o.epochs = int(t.get_int("epochs", o.epochs));
@@ -44,13 +32,6 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
     if (o.noise_fraction < 0.0) t.fail("noise_fraction", "must be non-negative");
     if (!(o.balancing_floor >= 0.0)) t.fail("balancing_floor", "must be non-negative");
     if (!(o.penalty_weight > 0.0)) t.fail("penalty_weight", "must be positive");
-}
-
-std::string widths_text(const std::vector<Index>& w)
-{
-    std::string s;
-    for (size_t i = 0; i < w.size(); ++i) s += (i ? ", " : "") + std::to_string(w[i]);
-    return s;
 }
 
 class LatentMlpMethod final : public Method {
@@ -95,7 +76,7 @@ public:
         return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", balancing " +
                (m_options.data_balancing ? "on" : "off");
     }
-    std::string layers() const override { return widths_text(m_options.hidden); }
+    std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
     bool is_paper_method() const override { return m_options.loss == IntegratorLoss::SelfSupervised; }
 
