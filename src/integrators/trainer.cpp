@@ -8,10 +8,13 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/log.hpp"
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
 #include "nn/adam.hpp"
+#include "nn/checkpoint.hpp"
+#include "nn/training_loop.hpp"
 #include "nn/serialization.hpp"
 
 namespace lb {
@@ -35,6 +38,25 @@ std::string IntegratorTrainOptions::describe() const
     for (size_t i = 0; i < hidden.size(); ++i) s << (i ? "," : "") << hidden[i];
     s << "], noise " << (training_noise ? "on" : "off") << ", balancing " << (data_balancing ? "on" : "off")
       << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
+    return s.str();
+}
+
+std::string IntegratorTrainer::resolved_options(Index num_samples) const
+{
+    const IntegratorTrainOptions& o = m_options;
+    const bool self_supervised = o.loss == IntegratorLoss::SelfSupervised;
+    std::ostringstream s;
+    s << "loss=" << to_string(o.loss) << ";hidden=";
+    for (size_t i = 0; i < o.hidden.size(); ++i) s << (i ? "," : "") << o.hidden[i];
+    s << ";epochs=" << o.epochs << ";batch=" << std::min<Index>(o.batch_size, num_samples)
+      << ";lr=" << nn::exact_text(o.learning_rate) << ";noise=" << (o.training_noise ? "on" : "off");
+    if (o.training_noise) s << ";noise_fraction=" << nn::exact_text(o.noise_fraction);
+    if (self_supervised) {
+        s << ";balancing=" << (o.data_balancing ? "on" : "off");
+        if (o.data_balancing) s << ";balancing_floor=" << nn::exact_text(o.balancing_floor);
+        s << ";penalty_weight=" << nn::exact_text(m_penalty_weight);
+    }
+    s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
     return s.str();
 }
 
@@ -80,10 +102,10 @@ IntegratorTrainer::IntegratorTrainer(const PhysicsModel& model, Autoencoder& aut
                                      IntegratorTrainOptions options)
     : m_model(model), m_autoencoder(autoencoder), m_options(std::move(options))
 {
-    const double w_bc = model.kind() == MeshKind::Rods ? 0.0 : m_options.penalty_weight;
+    m_penalty_weight = model.kind() == MeshKind::Rods ? 0.0 : m_options.penalty_weight;
     const int threads = std::max(1, omp_get_max_threads());
     m_potentials.reserve(size_t(threads));
-    for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, w_bc);
+    for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
 }
 
 IntegratorBatch IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::vector<Index>& indices,
@@ -217,19 +239,50 @@ double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 }
 
 namespace {
-void save_checkpoint(const std::string& path, LatentMlpModel& model, const nn::Adam& adam, int epoch,
-                     const IntegratorTrainOptions& options)
+
+/// Content hash of what defines the physics (mesh, material, dt, gravity, Dirichlet set).
+std::string physics_hash(const PhysicsSpec& p)
 {
-    h5::AtomicOutput out(path);
-    {
-        h5::File f = h5::File::create(out.temp_path());
-        model.save(f, "integrator.");
-        nn::save_adam_state(f, "integrator.", adam, model.network.parameters("integrator."));
-        f.set_attribute("/", "epoch", (long long)epoch);
-        f.set_attribute("/", "options", options.describe());
-    }
-    out.commit();
+    Fnv1a64 h;
+    h.add(int(p.mesh.kind)).add(MatrixXd(p.mesh.rest_positions)).add(p.mesh.elements);
+    for (const auto& rod : p.mesh.rods) h.add(std::int64_t(rod.size())).add_bytes(rod.data(), rod.size() * sizeof(int));
+    h.add(p.material.youngs_modulus).add(p.material.poisson_ratio).add(p.material.density);
+    h.add(p.material.thickness).add(p.material.radius).add(p.dt);
+    h.add(p.gravity.x()).add(p.gravity.y()).add(p.gravity.z());
+    h.add(std::int64_t(p.bc_indices.size())).add_bytes(p.bc_indices.data(), p.bc_indices.size() * sizeof(int));
+    return h.hex();
 }
+
+std::string samples_hash(const TrainingSamples& s)
+{
+    Fnv1a64 h;
+    for (const MatrixXd* m : {&s.z_prev, &s.z_prev2, &s.z_target, &s.p, &s.p_prev, &s.p_prev2, &s.targets,
+                              &s.targets_prev, &s.targets_prev2})
+        h.add(*m);
+    return h.hex();
+}
+
+/// The integrator as seen by the shared training loop: batches (with noise) from the
+/// samples, the trainer's loss and gradient.
+class IntegratorLearner final : public nn::Learner {
+public:
+    IntegratorLearner(IntegratorTrainer& trainer, LatentMlpModel& model, const TrainingSamples& samples)
+        : m_trainer(trainer), m_model(model), m_samples(samples)
+    {
+    }
+    Index num_samples() const override { return m_samples.size(); }
+    std::vector<nn::ParameterRef> parameters() override { return m_model.network.parameters("integrator."); }
+    double loss_and_gradient(const std::vector<Index>& indices, Rng& rng) override
+    {
+        return m_trainer.loss_and_gradient(m_model, m_trainer.make_batch(m_samples, indices, rng));
+    }
+
+private:
+    IntegratorTrainer& m_trainer;
+    LatentMlpModel& m_model;
+    const TrainingSamples& m_samples;
+};
+
 } // namespace
 
 IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const TrainingSamples& samples)
@@ -237,6 +290,18 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     Timer timer;
     IntegratorTrainSummary summary;
     const Index S = samples.size();
+    // The fingerprint: resolved options and the inputs' contents, taken before anything
+    // is loaded (the network part identifies the caller's initial weights).
+    nn::Fingerprint fingerprint;
+    {
+        Fnv1a64 net_hash;
+        nn::hash_network(net_hash, model.network);
+        fingerprint.add("options", resolved_options(S))
+            .add("autoencoder", m_autoencoder.content_hash())
+            .add("data", samples_hash(samples))
+            .add("physics", physics_hash(m_model.spec()))
+            .add("network", net_hash.hex());
+    }
     // Input standardisation and output scale from the (clean) training samples.
     {
         MatrixXd inputs(model.input_dim(), S);
@@ -257,70 +322,27 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     model.loss = to_string(m_options.loss);
     model.description = m_options.describe();
 
-    nn::Adam adam(model.network.parameters("integrator."), {m_options.learning_rate});
-    int start_epoch = 0;
-    if (!m_options.checkpoint_path.empty() && std::filesystem::exists(m_options.checkpoint_path)) {
-        const h5::File f = h5::File::open(m_options.checkpoint_path);
-        if (f.attribute_string("/", "options") == m_options.describe()) {
-            LatentMlpModel saved = LatentMlpModel::load(f, "integrator.");
-            const auto src = saved.network.parameters();
-            auto dst = model.network.parameters();
-            for (size_t i = 0; i < dst.size(); ++i) dst[i].value = src[i].value;
-            nn::load_adam_state(f, "integrator.", adam, model.network.parameters("integrator."));
-            start_epoch = int(f.attribute_int("/", "epoch"));
-            summary.resumed = true;
-            log_info("resuming integrator training from %s at epoch %d", m_options.checkpoint_path.c_str(), start_epoch);
-        } else {
-            log_warn("ignoring checkpoint %s: it was made with other options", m_options.checkpoint_path.c_str());
-        }
-    }
-
-    std::vector<Index> order(static_cast<size_t>(S));
-    std::iota(order.begin(), order.end(), 0);
-    const Index batch = std::min<Index>(m_options.batch_size, S);
-    Progress progress("train " + to_string(m_options.loss) + " epoch", m_options.epochs,
-                      m_options.progress ? 2.0 : 1e30);
-    int epoch = start_epoch;
-    double epoch_loss = 0.0;
-    for (; epoch < m_options.epochs; ++epoch) {
-        // Seeding per epoch makes a resumed run draw the same batches and noise.
-        Rng rng(m_options.seed * 1000003ull + std::uint64_t(epoch));
-        std::iota(order.begin(), order.end(), 0);
-        std::shuffle(order.begin(), order.end(), rng.engine());
-        epoch_loss = 0.0;
-        int batches = 0;
-        for (Index start = 0; start + batch <= S || (start < S && batches == 0); start += batch) {
-            const Index end = std::min(start + batch, S);
-            const std::vector<Index> idx(order.begin() + start, order.begin() + end);
-            const IntegratorBatch b = make_batch(samples, idx, rng);
-            model.network.zero_grad();
-            epoch_loss += loss_and_gradient(model, b);
-            adam.step();
-            ++batches;
-        }
-        epoch_loss /= std::max(batches, 1);
-        if (m_options.progress) {
-            char extra[96];
-            std::snprintf(extra, sizeof extra, "loss %.6g", epoch_loss);
-            progress.update(epoch + 1, extra);
-        }
-        if (!m_options.checkpoint_path.empty() && (epoch + 1) % m_options.checkpoint_every == 0) {
-            save_checkpoint(m_options.checkpoint_path, model, adam, epoch + 1, m_options);
-        }
-        if (m_options.max_seconds > 0.0 && timer.seconds() > m_options.max_seconds) {
-            summary.time_limited = true;
-            ++epoch;
-            break;
-        }
-    }
-    summary.epochs_run = epoch;
-    summary.final_loss = epoch_loss;
+    nn::TrainingLoopOptions loop;
+    loop.label = "train " + to_string(m_options.loss);
+    loop.epochs = m_options.epochs;
+    loop.batch_size = m_options.batch_size;
+    loop.learning_rate = m_options.learning_rate;
+    loop.seed = m_options.seed;
+    loop.max_seconds = m_options.max_seconds;
+    loop.checkpoint_path = m_options.checkpoint_path;
+    loop.checkpoint_every = m_options.checkpoint_every;
+    loop.resume = m_options.resume;
+    loop.progress = m_options.progress;
+    loop.interrupt = m_options.interrupt;
+    IntegratorLearner learner(*this, model, samples);
+    const nn::TrainingLoopSummary s = nn::run_training_loop(learner, loop, fingerprint);
+    summary.epochs_run = s.epochs_run;
+    summary.final_loss = s.final_loss;
+    summary.resumed = s.resumed;
+    summary.time_limited = s.time_limited;
+    summary.interrupted = s.interrupted;
+    summary.checkpoint_refused = s.checkpoint_refused;
     summary.seconds = timer.seconds();
-    if (m_options.progress) {
-        char extra[128];
-        std::snprintf(extra, sizeof extra, "final loss %.6g%s", epoch_loss, summary.time_limited ? " (time limit)" : "");
-        progress.finish(extra);
-    }
     return summary;
 }
 

@@ -18,6 +18,7 @@
 //   boundary parameters unchanged (paper eq. 5).
 // The batch loss is the mean over its (possibly doubled) samples.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -44,11 +45,19 @@ struct IntegratorTrainOptions {
     std::uint64_t seed = 0;
     /// Stop after this many seconds (0: no limit); the summary says so.
     double max_seconds = 0.0;
+    /// Checkpoint file (empty: none), written every checkpoint_every epochs and at the end.
+    /// It is resumed only if it was made from the same resolved options, autoencoder,
+    /// training samples, physics and initial network (nn/checkpoint.hpp); otherwise it is
+    /// set aside as `<path>.stale` with a log line saying why.
     std::string checkpoint_path;
     int checkpoint_every = 100;
     /// false: never resume; an existing checkpoint is set aside (the pipeline's --force).
     bool resume = true;
     bool progress = true;
+    /// Called after every epoch with the number of epochs completed; returning true stops
+    /// training there as a killed run would stop: no further checkpoint is written (the
+    /// last periodic one stays). For cancellation and tests; not part of the fingerprint.
+    std::function<bool(int epochs_done)> interrupt;
     /// One line for logs and file attributes.
     std::string describe() const;
 };
@@ -81,6 +90,9 @@ struct IntegratorTrainSummary {
     double seconds = 0.0;
     bool resumed = false;
     bool time_limited = false;
+    bool interrupted = false;  ///< stopped by options.interrupt
+    /// Why an existing checkpoint was not resumed (empty if none existed or it was resumed).
+    std::string checkpoint_refused;
 };
 
 class IntegratorTrainer {
@@ -103,6 +115,11 @@ public:
     /// Mean |v_{t−1}| over the samples' ground-truth decoded inputs.
     double mean_input_speed(const TrainingSamples& samples);
 
+    /// The resolved options as "key=value;..." text: every field that changes the numbers
+    /// (fields that cannot matter, e.g. the noise fraction without noise, are left out;
+    /// the penalty weight is the one applied, 0 for rods). Not progress/checkpointing.
+    std::string resolved_options(Index num_samples) const;
+
     /// Decode the samples' ground-truth input latents once (x_{t−1}, x_{t−2} of the clean
     /// columns of every batch): the decoder is frozen, so they never change.
     void cache_decoded_inputs(const TrainingSamples& samples);
@@ -115,6 +132,7 @@ private:
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
     IntegratorTrainOptions m_options;
+    double m_penalty_weight = 0.0;  ///< w_bc applied (0 for rods: hard roots)
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
     double m_velocity_floor = 1e-6;
     MatrixXd m_decoded_prev, m_decoded_prev2;  ///< 3N × S cache (empty: decode every batch)

@@ -9,23 +9,26 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/parse.hpp"
 #include "core/log.hpp"
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
 #include "latent/pca.hpp"
 #include "nn/adam.hpp"
+#include "nn/checkpoint.hpp"
 #include "nn/linear.hpp"
 #include "nn/mlp_spec.hpp"
 #include "nn/network_derivatives.hpp"
 #include "nn/serialization.hpp"
+#include "nn/training_loop.hpp"
 
 namespace lb {
 
 namespace {
 
 constexpr const char* kFileFormat = "latentbench.autoencoder/1";
-constexpr const char* kCheckpointFormat = "latentbench.autoencoder_checkpoint/1";
+constexpr const char* kCheckpointFormat = "latentbench.autoencoder_checkpoint/2";
 
 std::string join(const std::vector<Index>& v)
 {
@@ -57,26 +60,8 @@ void validate_training(const AutoencoderOptions& o)
     if (o.checkpoint_every < 1) throw ConfigError("autoencoder: checkpoint_every must be ≥ 1");
 }
 
-/// Copy parameter values and buffers (BatchNorm statistics) of `src` into `dst`, which
-/// must have the same structure; storage of `dst` is kept (an optimiser on it stays valid).
-void copy_state(nn::Sequential& dst, nn::Sequential& src)
-{
-    auto dp = dst.parameters(), sp = src.parameters();
-    auto db = dst.buffers(), sb = src.buffers();
-    if (dp.size() != sp.size() || db.size() != sb.size())
-        throw std::invalid_argument("copy_state: networks differ in structure");
-    for (std::size_t i = 0; i < dp.size(); ++i) {
-        if (dp[i].name != sp[i].name || dp[i].value.rows() != sp[i].value.rows() ||
-            dp[i].value.cols() != sp[i].value.cols())
-            throw std::invalid_argument("copy_state: parameter '" + dp[i].name + "' differs");
-        dp[i].value = sp[i].value;
-    }
-    for (std::size_t i = 0; i < db.size(); ++i) {
-        if (db[i].name != sb[i].name || db[i].value.size() != sb[i].value.size())
-            throw std::invalid_argument("copy_state: buffer '" + db[i].name + "' differs");
-        db[i].value = sb[i].value;
-    }
-}
+/// Copy parameters and buffers of `src` into `dst` (same structure; storage of `dst` kept).
+void copy_state(nn::Sequential& dst, nn::Sequential& src) { nn::copy_network_state(dst, src); }
 
 nn::Linear& linear_layer(nn::Sequential& net, Index i, const char* what)
 {
@@ -85,24 +70,7 @@ nn::Linear& linear_layer(nn::Sequential& net, Index i, const char* what)
     return *lin;
 }
 
-// FNV-1a over the bytes of a matrix: identifies the training data in checkpoints.
-std::uint64_t fnv1a(const MatrixXd& m, std::uint64_t h = 1469598103934665603ull)
-{
-    const auto* bytes = reinterpret_cast<const unsigned char*>(m.data());
-    const std::size_t n = sizeof(double) * static_cast<std::size_t>(m.size());
-    for (std::size_t i = 0; i < n; ++i) {
-        h ^= bytes[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
-std::string hexfloat(double x)
-{
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%a", x);
-    return buf;
-}
+std::string hexfloat(double x) { return nn::exact_text(x); }
 
 long long require_int(const h5::File& f, const std::string& key)
 {
@@ -222,6 +190,18 @@ double Autoencoder::relative_rmse(const MatrixXd& X, const MatrixXd& bc_targets)
     return std::sqrt((X_hat - X).squaredNorm() / (num_vertices * double(X.cols()))) / m_length_scale;
 }
 
+std::string Autoencoder::content_hash()
+{
+    Fnv1a64 h;
+    h.add(std::string(m_encoding.kind_name())).add(std::int64_t(m_encoding.num_features()));
+    h.add(std::int64_t(m_options.latent_dim));
+    const auto& bc = m_encoding.bc_indices();
+    h.add(std::int64_t(bc.size())).add_bytes(bc.data(), bc.size() * sizeof(int));
+    nn::hash_network(h, m_encoder);
+    nn::hash_network(h, m_decoder);
+    return h.hex();
+}
+
 void Autoencoder::save(const std::string& path)
 {
     h5::AtomicOutput output(path);
@@ -313,106 +293,26 @@ FrameSet training_frames(const Dataset& data)
 
 namespace {
 
-struct TrainingState {
-    int epoch = 0;                   ///< epochs completed
-    int best_epoch = 0;
-    double best_validation_mse = std::numeric_limits<double>::infinity();
-    int epochs_since_improvement = 0;
-    double last_train_mse = 0.0;
-};
-
-std::string fingerprint(const Autoencoder& ae, const AutoencoderOptions& o, const MatrixXd& features)
+/// Resolved options (every field that changes the numbers), the training data and the
+/// starting networks (architecture, init seed and PCA layers in one hash).
+/// @param num_batches, validation_every  as resolved by train_autoencoder
+nn::Fingerprint fingerprint(Autoencoder& ae, const AutoencoderOptions& o, const MatrixXd& features,
+                            Index num_batches, Index validation_every)
 {
     const auto& a = ae.options();
     std::ostringstream os;
     os << "latent=" << a.latent_dim << ";hidden=" << join(a.hidden) << ";pca=" << a.pca_dim
        << ";bn=" << a.batch_norm << ";res=" << a.residual << ";encoding=" << ae.encoding().kind_name()
-       << ";init_seed=" << ae.seed() << ";seed=" << o.seed << ";batch=" << o.batch_size
-       << ";lr=" << hexfloat(o.learning_rate) << ";val=" << hexfloat(o.validation_fraction)
-       << ";features=" << features.rows() << "x" << features.cols() << ";data=" << std::hex << fnv1a(features);
-    return os.str();
-}
-
-void write_checkpoint(const std::string& path, const std::string& print, Autoencoder& ae, nn::Sequential& best_enc,
-                      nn::Sequential& best_dec, const nn::Adam& adam,
-                      const std::vector<nn::ParameterRef>& params, Rng& rng, const TrainingState& st)
-{
-    h5::AtomicOutput output(path);
-    {
-        h5::File file = h5::File::create(output.temp_path());
-        nn::save_network(file, "encoder.", ae.encoder());
-        nn::save_network(file, "decoder.", ae.decoder());
-        nn::save_network(file, "best_encoder.", best_enc);
-        nn::save_network(file, "best_decoder.", best_dec);
-        const nn::AdamState& s = adam.state();
-        for (std::size_t i = 0; i < params.size(); ++i) {
-            file.write("adam/m/" + params[i].name, s.m[i]);
-            file.write("adam/v/" + params[i].name, s.v[i]);
-        }
-        std::ostringstream rng_state;
-        rng_state << rng.engine();
-        file.set_attribute("/", "format", std::string(kCheckpointFormat));
-        file.set_attribute("/", "fingerprint", print);
-        file.set_attribute("/", "rng_state", rng_state.str());
-        file.set_attribute("/", "adam_step", (long long)s.step);
-        file.set_attribute("/", "epoch", (long long)st.epoch);
-        file.set_attribute("/", "best_epoch", (long long)st.best_epoch);
-        file.set_attribute("/", "best_validation_mse", hexfloat(st.best_validation_mse));
-        file.set_attribute("/", "epochs_since_improvement", (long long)st.epochs_since_improvement);
-        file.set_attribute("/", "last_train_mse", hexfloat(st.last_train_mse));
-    }
-    output.commit();
-}
-
-/// Returns false (with a warning) if the checkpoint was made differently; throws
-/// IoError if it claims to match but cannot be read.
-bool read_checkpoint(const std::string& path, const std::string& print, Autoencoder& ae, nn::Sequential& best_enc,
-                     nn::Sequential& best_dec, nn::Adam& adam, const std::vector<nn::ParameterRef>& params,
-                     Rng& rng, TrainingState& st)
-{
-    const h5::File file = h5::File::open(path);
-    const std::string where = "checkpoint '" + path + "'";
-    if (!file.has_attribute("/", "format") || file.attribute_string("/", "format") != kCheckpointFormat) {
-        log_warn("%s is not an autoencoder checkpoint; starting from scratch (it will be overwritten)", path.c_str());
-        return false;
-    }
-    if (file.attribute_string("/", "fingerprint") != print) {
-        log_warn("%s was made with different options or data; starting from scratch (it will be overwritten)",
-                 path.c_str());
-        log_debug("checkpoint fingerprint %s, this run %s", file.attribute_string("/", "fingerprint").c_str(),
-                  print.c_str());
-        return false;
-    }
-    try {
-        auto load_into = [&](nn::Sequential& dst, const std::string& prefix) {
-            nn::Sequential loaded = nn::load_network(file, prefix).network;
-            copy_state(dst, loaded);
-        };
-        load_into(ae.encoder(), "encoder.");
-        load_into(ae.decoder(), "decoder.");
-        load_into(best_enc, "best_encoder.");
-        load_into(best_dec, "best_decoder.");
-        nn::AdamState s;
-        s.step = file.attribute_int("/", "adam_step");
-        for (const auto& p : params) {
-            s.m.push_back(file.read_matrix("adam/m/" + p.name));
-            s.v.push_back(file.read_matrix("adam/v/" + p.name));
-        }
-        adam.set_state(std::move(s));
-        std::istringstream rng_state(file.attribute_string("/", "rng_state"));
-        rng_state >> rng.engine();
-        if (rng_state.fail()) throw IoError(where + ": malformed 'rng_state'");
-        st.epoch = int(file.attribute_int("/", "epoch"));
-        st.best_epoch = int(file.attribute_int("/", "best_epoch"));
-        st.best_validation_mse = std::strtod(file.attribute_string("/", "best_validation_mse").c_str(), nullptr);
-        st.epochs_since_improvement = int(file.attribute_int("/", "epochs_since_improvement"));
-        st.last_train_mse = std::strtod(file.attribute_string("/", "last_train_mse").c_str(), nullptr);
-    } catch (const std::invalid_argument& e) {
-        throw IoError(where + ": " + e.what() + " (delete it to start from scratch)");
-    } catch (const IoError& e) {
-        throw IoError(std::string(e.what()) + " (delete " + path + " to start from scratch)");
-    }
-    return true;
+       << ";init_seed=" << ae.seed() << ";epochs=" << o.epochs << ";batches=" << num_batches
+       << ";lr=" << hexfloat(o.learning_rate) << ";validation_every=" << validation_every
+       << ";patience=" << o.patience << ";seed=" << o.seed << ";max_seconds=" << hexfloat(o.max_seconds);
+    Fnv1a64 data, net;
+    data.add(features);
+    nn::hash_network(net, ae.encoder());
+    nn::hash_network(net, ae.decoder());
+    nn::Fingerprint f;
+    f.add("options", os.str()).add("data", data.hex()).add("network", net.hex());
+    return f;
 }
 
 /// Mean squared error per position DOF of the eval-mode reconstruction of `features`.
@@ -422,6 +322,81 @@ double eval_mse(Autoencoder& ae, const MatrixXd& features)
     const MatrixXd Y = ae.decoder().forward(ae.encoder().forward(features, false), false);
     return (Y - features).squaredNorm() / (double(ae.encoding().num_dofs()) * double(features.cols()));
 }
+
+/// The autoencoder as seen by the shared training loop: reconstruction MSE of the
+/// training features, validation MSE in eval mode, best weights and BatchNorm statistics
+/// kept by the learner (and saved in checkpoints).
+class AutoencoderLearner final : public nn::Learner {
+public:
+    AutoencoderLearner(Autoencoder& ae, const MatrixXd& train_features, const MatrixXd& val_features)
+        : m_ae(ae), m_train(train_features), m_val(val_features), m_best_enc(ae.encoder()),
+          m_best_dec(ae.decoder()), m_dofs(double(ae.encoding().num_dofs()))
+    {
+    }
+    Index num_samples() const override { return m_train.cols(); }
+    std::vector<nn::ParameterRef> parameters() override
+    {
+        std::vector<nn::ParameterRef> params = m_ae.encoder().parameters("encoder.");
+        for (auto& p : m_ae.decoder().parameters("decoder.")) params.push_back(p);
+        return params;
+    }
+    /// ||f̂ − f||² / (3N · n) in training mode (BatchNorm batch statistics).
+    double loss_and_gradient(const std::vector<Index>& indices, Rng&) override
+    {
+        const Index n = Index(indices.size());
+        MatrixXd batch(m_train.rows(), n);
+        for (Index i = 0; i < n; ++i) batch.col(i) = m_train.col(indices[std::size_t(i)]);
+        const MatrixXd Z = m_ae.encoder().forward(batch, true);
+        const MatrixXd residual = m_ae.decoder().forward(Z, true) - batch;
+        const MatrixXd dZ = m_ae.decoder().backward((2.0 / (m_dofs * double(n))) * residual, true);
+        m_ae.encoder().backward(dZ, true);
+        return residual.squaredNorm() / (m_dofs * double(n));
+    }
+    bool has_validation() const override { return true; }
+    double validation_loss() override { return eval_mse(m_ae, m_val); }
+    void snapshot_best() override
+    {
+        copy_state(m_best_enc, m_ae.encoder());
+        copy_state(m_best_dec, m_ae.decoder());
+    }
+    void restore_best() override
+    {
+        copy_state(m_ae.encoder(), m_best_enc);
+        copy_state(m_ae.decoder(), m_best_dec);
+    }
+    void save_state(h5::File& file) override
+    {
+        nn::save_network(file, "encoder.", m_ae.encoder());
+        nn::save_network(file, "decoder.", m_ae.decoder());
+        nn::save_network(file, "best_encoder.", m_best_enc);
+        nn::save_network(file, "best_decoder.", m_best_dec);
+    }
+    void load_state(const h5::File& file) override
+    {
+        // Everything into temporaries first (copy_state checks names and shapes), then commit.
+        auto load_like = [&](nn::Sequential& like, const std::string& prefix) {
+            nn::Sequential loaded = nn::load_network(file, prefix).network;
+            nn::Sequential out(like);
+            copy_state(out, loaded);
+            return out;
+        };
+        nn::Sequential enc = load_like(m_ae.encoder(), "encoder.");
+        nn::Sequential dec = load_like(m_ae.decoder(), "decoder.");
+        nn::Sequential benc = load_like(m_best_enc, "best_encoder.");
+        nn::Sequential bdec = load_like(m_best_dec, "best_decoder.");
+        copy_state(m_ae.encoder(), enc);
+        copy_state(m_ae.decoder(), dec);
+        copy_state(m_best_enc, benc);
+        copy_state(m_best_dec, bdec);
+    }
+
+private:
+    Autoencoder& m_ae;
+    const MatrixXd& m_train;
+    const MatrixXd& m_val;
+    nn::Sequential m_best_enc, m_best_dec;
+    double m_dofs;
+};
 
 } // namespace
 
@@ -472,100 +447,38 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
              long(ae.latent_dim()), pca_text, long(S), long(val_idx.size()),
              has_validation ? "" : " (no validation split: validating on the training frames)");
 
-    std::vector<nn::ParameterRef> params = ae.encoder().parameters("encoder.");
-    for (auto& p : ae.decoder().parameters("decoder.")) params.push_back(p);
-    nn::AdamOptions adam_options;
-    adam_options.lr = options.learning_rate;
-    nn::Adam adam(params, adam_options);
-    Rng rng(options.seed);
-    nn::Sequential best_enc(ae.encoder()), best_dec(ae.decoder());
-    TrainingState st;
-
-    AutoencoderTrainSummary summary;
-    const std::string print = fingerprint(ae, options, all_features);
-    const bool checkpointing = !options.checkpoint_path.empty();
-    if (checkpointing && std::filesystem::exists(options.checkpoint_path)) {
-        summary.resumed =
-            read_checkpoint(options.checkpoint_path, print, ae, best_enc, best_dec, adam, params, rng, st);
-        if (summary.resumed)
-            log_info("autoencoder: resuming from checkpoint %s at epoch %d (best validation MSE %.4e at epoch %d)",
-                     options.checkpoint_path.c_str(), st.epoch, st.best_validation_mse, st.best_epoch);
-    }
-
-    // ---- epochs
-    const double dof_count = double(enc.num_dofs());
     // ceil(S / batch_size) batches of near-equal size, but never one of a single frame
     // (training-mode BatchNorm needs two): at most S / 2 batches.
     const Index num_batches = std::min((S + options.batch_size - 1) / options.batch_size, S / 2);
-    std::vector<Index> order(static_cast<std::size_t>(S));
-    const int start_epoch = st.epoch;
-    double last_report = -1e300;
-    auto early_stop = [&] { return options.patience > 0 && st.epochs_since_improvement >= options.patience; };
-    auto checkpoint = [&] {
-        if (checkpointing)
-            write_checkpoint(options.checkpoint_path, print, ae, best_enc, best_dec, adam, params, rng, st);
-    };
-    while (st.epoch < options.epochs && !early_stop()) {
-        for (Index i = 0; i < S; ++i) order[std::size_t(i)] = i;
-        for (Index i = S - 1; i > 0; --i) std::swap(order[std::size_t(i)], order[std::size_t(rng.index(i + 1))]);
+    const nn::Fingerprint print = fingerprint(ae, options, all_features, num_batches, k);
+    nn::TrainingLoopOptions loop;
+    loop.label = "train-ae";
+    loop.epochs = options.epochs;
+    loop.batch_size = options.batch_size;
+    loop.min_batch = 2;
+    loop.learning_rate = options.learning_rate;
+    loop.seed = options.seed;
+    loop.patience = options.patience;
+    loop.max_seconds = options.max_seconds;
+    loop.checkpoint_path = options.checkpoint_path;
+    loop.checkpoint_every = options.checkpoint_every;
+    loop.resume = options.resume;
+    loop.progress = options.progress;
+    loop.interrupt = options.interrupt;
+    AutoencoderLearner learner(ae, train_features, val_features);
+    const nn::TrainingLoopSummary s = nn::run_training_loop(learner, loop, print);
 
-        double sq_sum = 0.0;
-        Index begin = 0;
-        for (Index b = 0; b < num_batches; ++b) {
-            const Index end = S * (b + 1) / num_batches;  // near-equal batch sizes
-            const Index n = end - begin;
-            MatrixXd batch(train_features.rows(), n);
-            for (Index i = 0; i < n; ++i) batch.col(i) = train_features.col(order[std::size_t(begin + i)]);
-            adam.zero_grad();
-            const MatrixXd Z = ae.encoder().forward(batch, true);
-            const MatrixXd residual = ae.decoder().forward(Z, true) - batch;
-            sq_sum += residual.squaredNorm();
-            const MatrixXd dZ = ae.decoder().backward((2.0 / (dof_count * double(n))) * residual, true);
-            ae.encoder().backward(dZ, true);
-            adam.step();
-            begin = end;
-        }
-        ++st.epoch;
-        st.last_train_mse = sq_sum / (dof_count * double(S));
-        const double val_mse = eval_mse(ae, val_features);
-        if (!std::isfinite(st.last_train_mse) || !std::isfinite(val_mse))
-            throw NumericalError("train_autoencoder: the loss became non-finite at epoch " + std::to_string(st.epoch) +
-                                 " (try a smaller learning rate)");
-        if (val_mse < st.best_validation_mse) {
-            st.best_validation_mse = val_mse;
-            st.best_epoch = st.epoch;
-            st.epochs_since_improvement = 0;
-            copy_state(best_enc, ae.encoder());
-            copy_state(best_dec, ae.decoder());
-        } else {
-            ++st.epochs_since_improvement;
-        }
-        if (st.epoch % options.checkpoint_every == 0) checkpoint();
-
-        const double elapsed = timer.seconds();
-        if (options.progress && (elapsed - last_report >= 2.0 || st.epoch == options.epochs)) {
-            last_report = elapsed;
-            const double eta = elapsed / double(st.epoch - start_epoch) * double(options.epochs - st.epoch);
-            log_info("train-ae epoch %d/%d  train MSE %.4e  validation MSE %.4e  (best %.4e @ %d)  elapsed %.1fs  "
-                     "eta %.1fs",
-                     st.epoch, options.epochs, st.last_train_mse, val_mse, st.best_validation_mse, st.best_epoch,
-                     elapsed, eta);
-        }
-    }
-    summary.stopped_early = early_stop() && st.epoch < options.epochs;
-    if (checkpointing && st.epoch % options.checkpoint_every != 0) checkpoint();
-
-    // ---- keep the best-validation weights
-    if (st.best_epoch > 0) {
-        copy_state(ae.encoder(), best_enc);
-        copy_state(ae.decoder(), best_dec);
-    } else {
-        st.best_validation_mse = eval_mse(ae, val_features);  // no epoch run: the PCA-initialised network
-    }
-    summary.epochs_run = st.epoch;
-    summary.best_epoch = st.best_epoch;
-    summary.best_validation_mse = st.best_validation_mse;
-    summary.final_train_mse = st.last_train_mse;
+    AutoencoderTrainSummary summary;
+    summary.epochs_run = s.epochs_run;
+    summary.best_epoch = s.best_epoch;
+    // No epoch run: the PCA-initialised network.
+    summary.best_validation_mse = s.best_epoch > 0 ? s.best_validation : eval_mse(ae, val_features);
+    summary.final_train_mse = s.final_loss;
+    summary.resumed = s.resumed;
+    summary.stopped_early = s.stopped_early;
+    summary.time_limited = s.time_limited;
+    summary.interrupted = s.interrupted;
+    summary.checkpoint_refused = s.checkpoint_refused;
     summary.validation_relative_rmse = ae.relative_rmse(val_positions, val_targets);
     summary.seconds = timer.seconds();
     if (options.progress)

@@ -15,6 +15,7 @@
 // The decoder maps z to features f; positions are x = P f + offset(bc targets)
 // (bc_encoding.hpp), so scripts/nn_reference.py --prefix decoder. gives f.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,11 +42,19 @@ struct AutoencoderOptions {
     /// Early stopping: stop after this many epochs without a validation improvement (0: never).
     int patience = 200;
     std::uint64_t seed = 0;
-    /// Checkpoint file (empty: none); training resumes from it if it exists and matches.
+    /// Stop after this many seconds (0: no limit); the summary says so.
+    double max_seconds = 0.0;
+    /// Checkpoint file (empty: none); training resumes from it if it exists and matches
+    /// (see train_autoencoder), otherwise it is set aside as `<path>.stale`.
     std::string checkpoint_path;
     int checkpoint_every = 100;
+    /// false: never resume; an existing checkpoint is set aside (the pipeline's --force).
     bool resume = true;
     bool progress = true;
+    /// Called after every epoch with the number of epochs completed; returning true stops
+    /// training there as a killed run would stop: no further checkpoint is written (the best
+    /// weights so far are still restored). For cancellation and tests; not fingerprinted.
+    std::function<bool(int epochs_done)> interrupt;
 };
 
 struct AutoencoderTrainSummary {
@@ -58,6 +67,10 @@ struct AutoencoderTrainSummary {
     double seconds = 0.0;
     bool resumed = false;
     bool stopped_early = false;
+    bool time_limited = false;
+    bool interrupted = false;  ///< stopped by options.interrupt
+    /// Why an existing checkpoint was not resumed (empty if none existed or it was resumed).
+    std::string checkpoint_refused;
 };
 
 class Autoencoder {
@@ -103,6 +116,11 @@ public:
     /// @param X  3N × S  @param bc_targets  3B × S
     double relative_rmse(const MatrixXd& X, const MatrixXd& bc_targets);
 
+    /// FNV-1a/64 (16 hex digits) of everything that defines encode/decode: encoding kind,
+    /// Dirichlet set, feature count, latent size and both networks' parameters and buffers.
+    /// Identifies this autoencoder in the fingerprints of checkpoints trained on it.
+    std::string content_hash();
+
     /// Written atomically (temporary file, then rename). See the file format above.
     void save(const std::string& path);
     /// Throws IoError naming the file if it is not an autoencoder file or its feature
@@ -145,18 +163,21 @@ FrameSet training_frames(const Dataset& data);
 /// - Loss: mean squared error per position DOF, computed on the features:
 ///   ||f̂ − f||² / (3N · batch). For ground-truth frames the BC offset is exact, so this
 ///   equals the position MSE (rods: the roots' error is identically zero).
-/// - Each epoch shuffles the training frames with Rng(options.seed) (Fisher–Yates) and
-///   splits them into min(ceil(S/batch_size), S/2) batches of near-equal size (so none
-///   has fewer than the 2 frames training-mode BatchNorm needs).
+/// - The epochs run in the shared loop (nn/training_loop.hpp): epoch e shuffles the
+///   training frames with Rng(epoch_seed(options.seed, e)) (Fisher–Yates) and splits them
+///   into min(ceil(S/batch_size), S/2) batches of near-equal size (so none has fewer than
+///   the 2 frames training-mode BatchNorm needs).
 ///   BatchNorm runs in training mode for the updates, eval mode for validation.
 /// - Early stopping: after `patience` epochs without a validation improvement; the
 ///   best-validation weights are restored at the end either way.
 /// - Checkpoint (if checkpoint_path is set): every checkpoint_every epochs and at the end,
 ///   written atomically; holds weights, BatchNorm statistics, the best weights, Adam state,
-///   epoch counters and the shuffling RNG state. If the file exists at the start and its
-///   fingerprint (architecture, seed, batch size, lr, validation split, training data hash)
-///   matches, training resumes from it bit-for-bit (epochs is then the total to reach);
-///   otherwise it is ignored with a warning and overwritten.
+///   epoch counters (no RNG state: shuffles are seeded per epoch). If the file exists at the start, resume
+///   is on and its fingerprint matches (nn/checkpoint.hpp: resolved options, i.e.
+///   architecture, init seed, epochs, batches, lr, validation split, patience, seed; a hash
+///   of the training features; a hash of the PCA-initialised starting networks), training
+///   resumes from it bit-for-bit. Otherwise (or if any tensor has the wrong shape) it is
+///   set aside as `<path>.stale` with a log line saying why, and training starts afresh.
 /// - Same seed and data → bitwise-identical weights (single-threaded Eigen).
 AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& options);
 

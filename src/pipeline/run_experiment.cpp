@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/log.hpp"
 #include "core/parse.hpp"
 #include "core/parallel.hpp"
@@ -91,7 +92,7 @@ private:
     void simulate()
     {
         m_result.dataset_file = m_dir + "/data.h5";
-        m_sim_key = hash_hex("simulate|" + m_scene.resolved_toml);
+        m_sim_key = fnv1a64_hex("simulate|" + m_scene.resolved_toml);
         m_cache.run("simulate", m_spec.label + ": full-space dataset", m_result.dataset_file, m_sim_key, [&] {
             SimulateOptions so;
             so.progress = log_level() >= LogLevel::Info;
@@ -116,7 +117,7 @@ private:
         ao.checkpoint_path = m_dir + "/ae.checkpoint.h5";
         ao.resume = !m_cache.forced("autoencoder");
         const std::string file = m_dir + "/ae.h5";
-        m_ae_key = hash_hex(m_sim_key + "|autoencoder|" + autoencoder_key(ao));
+        m_ae_key = fnv1a64_hex(m_sim_key + "|autoencoder|" + autoencoder_key(ao));
         m_cache.run("autoencoder", m_spec.label + ": autoencoder (latent " + std::to_string(ao.latent_dim) + ")", file,
                     m_ae_key, [&] {
                         Autoencoder ae(m_data.physics, ao, ao.seed);
@@ -161,7 +162,7 @@ private:
         in.progress = log_level() >= LogLevel::Info;
         in.newton = m_scene.newton;
         const std::string inputs_key = method.needs_autoencoder() ? m_ae_key : m_sim_key;
-        const std::string key = hash_hex(inputs_key + "|" + method.method_name() + "|" + method.options_text());
+        const std::string key = fnv1a64_hex(inputs_key + "|" + method.method_name() + "|" + method.options_text());
         const std::string artefact = m_dir + "/integrators/" + name + ".h5";
         if (method.has_artefact()) {
             m_cache.run("integrators", m_spec.label + ": fit '" + name + "' (" + method.method_name() + ": " +
@@ -175,7 +176,7 @@ private:
         mr.layers = method.layers();
         mr.paper_method = method.is_paper_method();
         mr.rollout_file = m_dir + "/rollouts/" + name + ".h5";
-        const std::string rkey = hash_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames));
+        const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames));
         m_cache.run("rollouts", m_spec.label + ": rollout '" + name + "'", mr.rollout_file, rkey, [&] {
             std::unique_ptr<Integrator> integrator;
             if (method.has_artefact()) {

@@ -1,7 +1,6 @@
 #include "pipeline/stage_cache.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -36,18 +35,6 @@ void write_key(const std::string& file, const std::string& key)
 }
 
 } // namespace
-
-std::string hash_hex(const std::string& text)
-{
-    std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64
-    for (unsigned char c : text) {
-        h ^= c;
-        h *= 1099511628211ull;
-    }
-    char buf[17];
-    std::snprintf(buf, sizeof buf, "%016llx", (unsigned long long)h);
-    return buf;
-}
 
 StageCache::StageCache(std::set<std::string> forced) : m_forced(std::move(forced))
 {

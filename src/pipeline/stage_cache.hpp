@@ -32,7 +32,4 @@ private:
     int m_cached = 0;
 };
 
-/// 16 hex digits of a 64-bit FNV-1a hash of `text` (cache keys).
-std::string hash_hex(const std::string& text);
-
 } // namespace lb

@@ -172,8 +172,8 @@ MatrixXd flat_weights(LatentMlpModel& m)
     return Eigen::Map<MatrixXd>(w.data(), Index(w.size()), 1);
 }
 
-// Training 2N epochs straight and N epochs + a resume from the checkpoint for N
-// more give the same weights (network, optimiser state and batches restored).
+// Training 2N epochs straight, and a run killed after N epochs (its checkpoint written)
+// then resumed, give the same weights (network, optimiser state and batches restored).
 TEST(IntegratorCheckpoint, ResumeReproducesUninterruptedTraining)
 {
     testing::TinyProblem p;
@@ -187,19 +187,22 @@ TEST(IntegratorCheckpoint, ResumeReproducesUninterruptedTraining)
     o.progress = false;
     o.epochs = 6;
     LatentMlpModel straight = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
-    IntegratorTrainer(*p.model, *p.ae, o).train(straight, p.samples);
+    const IntegratorTrainSummary s_straight = IntegratorTrainer(*p.model, *p.ae, o).train(straight, p.samples);
 
     o.checkpoint_path = dir + "/ckpt.h5";
     o.checkpoint_every = 3;
-    o.epochs = 3;
+    IntegratorTrainOptions killed = o;
+    killed.interrupt = [](int epochs_done) { return epochs_done == 3; };
     LatentMlpModel first = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
-    IntegratorTrainer(*p.model, *p.ae, o).train(first, p.samples);
+    const IntegratorTrainSummary s_first = IntegratorTrainer(*p.model, *p.ae, killed).train(first, p.samples);
+    EXPECT_TRUE(s_first.interrupted);
+    EXPECT_EQ(s_first.epochs_run, 3);
     ASSERT_TRUE(std::filesystem::exists(o.checkpoint_path));
-    o.epochs = 6;
     LatentMlpModel resumed = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, 3);
     const IntegratorTrainSummary s = IntegratorTrainer(*p.model, *p.ae, o).train(resumed, p.samples);
     EXPECT_TRUE(s.resumed);
     EXPECT_EQ(s.epochs_run, 6);
+    EXPECT_EQ(s.final_loss, s_straight.final_loss);
     EXPECT_EQ(flat_weights(resumed), flat_weights(straight));
 }
 

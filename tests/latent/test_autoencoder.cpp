@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
@@ -296,13 +297,17 @@ TEST(AutoencoderTraining, ResumingFromACheckpointEqualsTrainingStraight)
     Autoencoder straight(data.physics, o, 7);
     const auto s_straight = train_autoencoder(straight, data, o);
 
+    // A run killed after epoch 3 (its checkpoint written), then the same run again.
     const std::string ckpt = tmp_path("resume_checkpoint.h5");
     fs::remove(ckpt);
-    AutoencoderOptions first = o;
-    first.epochs = 3;
-    first.checkpoint_path = ckpt;
-    Autoencoder part(data.physics, first, 7);
-    EXPECT_FALSE(train_autoencoder(part, data, first).resumed);
+    AutoencoderOptions killed = o;
+    killed.checkpoint_path = ckpt;
+    killed.interrupt = [](int epochs_done) { return epochs_done == 3; };
+    Autoencoder part(data.physics, killed, 7);
+    const auto s_part = train_autoencoder(part, data, killed);
+    EXPECT_FALSE(s_part.resumed);
+    EXPECT_TRUE(s_part.interrupted);
+    EXPECT_EQ(s_part.epochs_run, 3);
     ASSERT_TRUE(fs::exists(ckpt));
 
     AutoencoderOptions second = o;
@@ -315,12 +320,93 @@ TEST(AutoencoderTraining, ResumingFromACheckpointEqualsTrainingStraight)
     EXPECT_EQ(s_resumed.best_validation_mse, s_straight.best_validation_mse);
     EXPECT_EQ(s_resumed.final_train_mse, s_straight.final_train_mse);
     EXPECT_TRUE(same_state(straight, resumed)) << "N + resume N epochs differs from 2N straight";
+}
 
-    // A checkpoint made with other options is ignored (and overwritten).
-    AutoencoderOptions changed = second;
-    changed.learning_rate = 2e-3;
-    Autoencoder fresh(data.physics, changed, 7);
-    EXPECT_FALSE(train_autoencoder(fresh, data, changed).resumed);
+// ---- checkpoints made from other inputs are set aside, never resumed -------------------
+
+struct AeChange {
+    const char* name;
+    const char* reason;  ///< the fingerprint part named in the refusal
+    std::function<void(AutoencoderOptions&, std::uint64_t&, int&)> apply;  ///< options, init seed, frames
+};
+
+class AeChangedInput : public ::testing::TestWithParam<AeChange> { };
+
+TEST_P(AeChangedInput, IsNotResumed)
+{
+    const AeChange& change = GetParam();
+    const std::string ckpt = tmp_path(std::string("changed_") + change.name + ".h5");
+    fs::remove(ckpt);
+    fs::remove(ckpt + ".stale");
+    AutoencoderOptions o = tiny_options();
+    o.epochs = 3;
+    o.checkpoint_every = 2;
+    o.checkpoint_path = ckpt;
+    const Dataset data = latent_test::small_cloth_prefix(150);
+    Autoencoder first(data.physics, o, 7);
+    ASSERT_FALSE(train_autoencoder(first, data, o).resumed);
+    ASSERT_TRUE(fs::exists(ckpt));
+
+    std::uint64_t init_seed = 7;
+    int frames = 150;
+    change.apply(o, init_seed, frames);
+    const Dataset other = frames == 150 ? data : latent_test::small_cloth_prefix(frames);
+    Autoencoder second(other.physics, o, init_seed);
+    const auto s = train_autoencoder(second, other, o);
+    EXPECT_FALSE(s.resumed);
+    EXPECT_EQ(s.epochs_run, o.epochs);
+    EXPECT_GT(s.final_train_mse, 0.0);
+    EXPECT_NE(s.checkpoint_refused.find(change.reason), std::string::npos)
+        << "reason '" << s.checkpoint_refused << "' does not mention '" << change.reason << "'";
+    EXPECT_TRUE(fs::exists(ckpt + ".stale"));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryInput, AeChangedInput,
+    ::testing::Values(
+        AeChange{"epochs", "options", [](auto& o, auto&, auto&) { o.epochs = 4; }},
+        AeChange{"learning_rate", "options", [](auto& o, auto&, auto&) { o.learning_rate = 2e-3; }},
+        AeChange{"batch_size", "options", [](auto& o, auto&, auto&) { o.batch_size = 64; }},
+        AeChange{"validation_fraction", "options", [](auto& o, auto&, auto&) { o.validation_fraction = 0.2; }},
+        AeChange{"patience", "options", [](auto& o, auto&, auto&) { o.patience = 5; }},
+        AeChange{"seed", "options", [](auto& o, auto&, auto&) { o.seed = 3; }},
+        AeChange{"hidden", "options", [](auto& o, auto&, auto&) { o.hidden = {6, 6}; }},
+        AeChange{"latent_dim", "options", [](auto& o, auto&, auto&) { o.latent_dim = 4; }},
+        AeChange{"init_seed", "options", [](auto&, auto& seed, auto&) { seed = 8; }},
+        AeChange{"data", "data", [](auto&, auto&, auto& frames) { frames = 151; }},
+        AeChange{"resume_off", "resume is off", [](auto& o, auto&, auto&) { o.resume = false; }}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+// A checkpoint whose fingerprint claims to match but whose tensors have other shapes is
+// refused by the shape checks, before anything is copied, instead of crashing.
+TEST(AutoencoderTraining, CheckpointOfOtherShapesIsRefused)
+{
+    const Dataset data = latent_test::small_cloth_prefix(150);
+    const std::string real = tmp_path("shape_real.h5"), narrow = tmp_path("shape_narrow.h5");
+    for (const auto& f : {real, narrow, real + ".stale"}) fs::remove(f);
+    AutoencoderOptions o = tiny_options();
+    o.epochs = 2;
+    o.checkpoint_path = real;
+    Autoencoder a(data.physics, o, 7);
+    train_autoencoder(a, data, o);
+    AutoencoderOptions n = o;
+    n.hidden = {6, 6};
+    n.checkpoint_path = narrow;
+    Autoencoder b(data.physics, n, 7);
+    train_autoencoder(b, data, n);
+    {
+        const h5::File from = h5::File::open(real);
+        h5::File forged = h5::File::open(narrow, true);
+        for (const char* key : {"fingerprint.parts", "fingerprint.options", "fingerprint.data", "fingerprint.network"})
+            forged.set_attribute("/", key, from.attribute_string("/", key));
+    }
+    fs::copy_file(narrow, real, fs::copy_options::overwrite_existing);
+    Autoencoder c(data.physics, o, 7);
+    const auto s = train_autoencoder(c, data, o);
+    EXPECT_FALSE(s.resumed);
+    EXPECT_NE(s.checkpoint_refused.find("shapes differ"), std::string::npos) << s.checkpoint_refused;
+    EXPECT_TRUE(fs::exists(real + ".stale"));
+    EXPECT_TRUE(same_state(a, c)) << "a refused checkpoint left traces in the weights";
 }
 
 TEST(AutoencoderTraining, SmallClothReconstructsWithinOnePercentOfTheDiagonal)

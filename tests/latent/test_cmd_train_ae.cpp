@@ -35,10 +35,19 @@ TEST(TrainAeCli, TrainsSavesAndResumes)
     EXPECT_EQ(ae.options().pca_dim, 8);
     EXPECT_EQ(ae.scene_name(), "cloth");
 
-    r = run_cli(common + " --epochs 4");
+    // The same command again resumes the (finished) checkpoint.
+    r = run_cli(common + " --epochs 2");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("resuming from checkpoint"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("2 epochs"), std::string::npos) << r.output;
+
+    // Other options: the checkpoint is set aside (saying why) and training starts afresh.
+    r = run_cli(common + " --epochs 4");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("resuming from checkpoint"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("epochs 2 → 4"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("4 epochs"), std::string::npos) << r.output;
+    EXPECT_TRUE(fs::exists(ckpt + ".stale"));
 }
 
 TEST(TrainAeCli, BadInputFailsCleanly)

@@ -1,0 +1,220 @@
+#include "nn/training_loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <numeric>
+
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "core/timer.hpp"
+#include "nn/adam.hpp"
+
+namespace lb::nn {
+
+namespace {
+
+constexpr const char* kFormat = "latentbench.training_checkpoint/1";
+
+struct Counters {
+    int epoch = 0;  ///< epochs completed
+    int best_epoch = 0;
+    double best_validation = std::numeric_limits<double>::infinity();
+    int epochs_since_improvement = 0;
+    double last_loss = 0.0;
+};
+
+void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, Learner& learner,
+                      const std::vector<ParameterRef>& params, const Adam& adam, const Counters& c)
+{
+    h5::AtomicOutput out(path);
+    {
+        h5::File f = h5::File::create(out.temp_path());
+        f.set_attribute("/", "format", std::string(kFormat));
+        write_fingerprint(f, fingerprint);
+        const AdamState& s = adam.state();
+        for (std::size_t i = 0; i < params.size(); ++i) {
+            f.write("param/" + params[i].name, MatrixXd(params[i].value));
+            f.write("adam/m/" + params[i].name, s.m[i]);
+            f.write("adam/v/" + params[i].name, s.v[i]);
+        }
+        f.set_attribute("/", "adam_step", (long long)s.step);
+        f.set_attribute("/", "epoch", (long long)c.epoch);
+        f.set_attribute("/", "best_epoch", (long long)c.best_epoch);
+        f.set_attribute("/", "best_validation", exact_text(c.best_validation));
+        f.set_attribute("/", "epochs_since_improvement", (long long)c.epochs_since_improvement);
+        f.set_attribute("/", "last_loss", exact_text(c.last_loss));
+        learner.save_state(f);
+    }
+    out.commit();
+}
+
+/// Resume, all or nothing: the reason it cannot be resumed (nothing changed), or empty.
+std::string read_checkpoint(const std::string& path, const Fingerprint& fingerprint, Learner& learner,
+                            std::vector<ParameterRef>& params, Adam& adam, Counters& c)
+{
+    try {
+        const h5::File f = h5::File::open(path);
+        if (!f.has_attribute("/", "format") || f.attribute_string("/", "format") != kFormat)
+            return "it is not a training checkpoint of this version";
+        if (std::string reason = fingerprint_mismatch(f, fingerprint); !reason.empty()) return reason;
+        std::vector<MatrixXd> values;
+        AdamState s;
+        for (const ParameterRef& p : params) {
+            for (const char* group : {"param/", "adam/m/", "adam/v/"}) {
+                if (!f.exists(group + p.name))
+                    throw CheckpointMismatch("'" + std::string(group) + p.name + "' is missing");
+            }
+            values.push_back(f.read_matrix("param/" + p.name));
+            s.m.push_back(f.read_matrix("adam/m/" + p.name));
+            s.v.push_back(f.read_matrix("adam/v/" + p.name));
+            require_shape(p.name, values.back(), p.value.rows(), p.value.cols());
+            require_shape("adam/m/" + p.name, s.m.back(), p.value.rows(), p.value.cols());
+            require_shape("adam/v/" + p.name, s.v.back(), p.value.rows(), p.value.cols());
+        }
+        s.step = f.attribute_int("/", "adam_step");
+        Counters t;
+        t.epoch = int(f.attribute_int("/", "epoch"));
+        t.best_epoch = int(f.attribute_int("/", "best_epoch"));
+        t.best_validation = std::strtod(f.attribute_string("/", "best_validation").c_str(), nullptr);
+        t.epochs_since_improvement = int(f.attribute_int("/", "epochs_since_improvement"));
+        t.last_loss = std::strtod(f.attribute_string("/", "last_loss").c_str(), nullptr);
+        learner.load_state(f);  // all or nothing; below nothing can fail (shapes checked)
+        adam.set_state(std::move(s));
+        for (std::size_t i = 0; i < params.size(); ++i) params[i].value = values[i];
+        c = t;
+    } catch (const CheckpointMismatch& e) {
+        return std::string("its shapes differ: ") + e.what();
+    } catch (const std::invalid_argument& e) {
+        return std::string("its shapes differ: ") + e.what();
+    } catch (const Error& e) {
+        return std::string("it cannot be read: ") + e.what();
+    }
+    return {};
+}
+
+} // namespace
+
+std::uint64_t epoch_seed(std::uint64_t seed, int epoch)
+{
+    std::uint64_t z = seed + 0x9e3779b97f4a7c15ull * (std::uint64_t(epoch) + 1);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOptions& o, const Fingerprint& fingerprint)
+{
+    if (o.epochs < 0) throw ConfigError(o.label + ": epochs must be ≥ 0");
+    if (o.batch_size < std::max<Index>(o.min_batch, 1))
+        throw ConfigError(o.label + ": batch_size must be ≥ " + std::to_string(std::max<Index>(o.min_batch, 1)));
+    if (!(o.learning_rate > 0.0) || !std::isfinite(o.learning_rate))
+        throw ConfigError(o.label + ": learning_rate must be positive and finite");
+    if (o.checkpoint_every < 1) throw ConfigError(o.label + ": checkpoint_every must be ≥ 1");
+    const Index S = learner.num_samples();
+    const Index min_batch = std::max<Index>(o.min_batch, 1);
+    if (S < min_batch) throw ConfigError(o.label + ": need at least " + std::to_string(min_batch) + " samples");
+
+    Timer timer;
+    TrainingLoopSummary summary;
+    std::vector<ParameterRef> params = learner.parameters();
+    AdamOptions adam_options;
+    adam_options.lr = o.learning_rate;
+    Adam adam(params, adam_options);
+    Counters c;
+    const bool validation = learner.has_validation();
+
+    const std::string& path = o.checkpoint_path;
+    if (!path.empty() && std::filesystem::exists(path)) {
+        const std::string reason = o.resume ? read_checkpoint(path, fingerprint, learner, params, adam, c)
+                                            : "resume is off (training from scratch as asked)";
+        if (reason.empty()) {
+            summary.resumed = true;
+            log_info("%s: resuming from checkpoint %s at epoch %d", o.label.c_str(), path.c_str(), c.epoch);
+        } else {
+            summary.checkpoint_refused = reason;
+            set_aside_checkpoint(path, reason);
+        }
+    }
+
+    // ceil(S / batch_size) batches of near-equal size, none smaller than min_batch.
+    const Index num_batches = std::max<Index>(1, std::min((S + o.batch_size - 1) / o.batch_size, S / min_batch));
+    std::vector<Index> order(static_cast<std::size_t>(S));
+    int last_saved = c.epoch;
+    auto checkpoint = [&] {
+        if (path.empty()) return;
+        write_checkpoint(path, fingerprint, learner, params, adam, c);
+        last_saved = c.epoch;
+    };
+    auto early_stop = [&] { return validation && o.patience > 0 && c.epochs_since_improvement >= o.patience; };
+    Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30);
+    while (c.epoch < o.epochs && !early_stop()) {
+        Rng rng(epoch_seed(o.seed, c.epoch));
+        std::iota(order.begin(), order.end(), Index(0));
+        for (Index i = S - 1; i > 0; --i) std::swap(order[std::size_t(i)], order[std::size_t(rng.index(i + 1))]);
+        double weighted = 0.0;
+        Index begin = 0;
+        for (Index b = 0; b < num_batches; ++b) {
+            const Index end = S * (b + 1) / num_batches;
+            const std::vector<Index> idx(order.begin() + begin, order.begin() + end);
+            adam.zero_grad();
+            weighted += learner.loss_and_gradient(idx, rng) * double(end - begin);
+            adam.step();
+            begin = end;
+        }
+        ++c.epoch;
+        c.last_loss = weighted / double(S);
+        const double val = validation ? learner.validation_loss() : 0.0;
+        if (!std::isfinite(c.last_loss) || !std::isfinite(val))
+            throw NumericalError(o.label + ": the loss became non-finite at epoch " + std::to_string(c.epoch) +
+                                 " (try a smaller learning rate)");
+        if (validation) {
+            if (val < c.best_validation) {
+                c.best_validation = val;
+                c.best_epoch = c.epoch;
+                c.epochs_since_improvement = 0;
+                learner.snapshot_best();
+            } else {
+                ++c.epochs_since_improvement;
+            }
+        }
+        if (c.epoch % o.checkpoint_every == 0) checkpoint();
+        if (o.progress) {
+            char extra[160];
+            if (validation)
+                std::snprintf(extra, sizeof extra, "loss %.4e  validation %.4e (best %.4e @ %d)", c.last_loss, val,
+                              c.best_validation, c.best_epoch);
+            else
+                std::snprintf(extra, sizeof extra, "loss %.6g", c.last_loss);
+            progress.update(c.epoch, extra);
+        }
+        if (o.interrupt && o.interrupt(c.epoch)) {
+            summary.interrupted = true;
+            break;
+        }
+        if (o.max_seconds > 0.0 && timer.seconds() > o.max_seconds) {
+            summary.time_limited = c.epoch < o.epochs;
+            break;
+        }
+    }
+    summary.stopped_early = early_stop() && c.epoch < o.epochs;
+    if (!summary.interrupted && last_saved != c.epoch) checkpoint();
+    if (validation && c.best_epoch > 0) learner.restore_best();
+
+    summary.epochs_run = c.epoch;
+    summary.best_epoch = c.best_epoch;
+    summary.best_validation = c.best_validation;
+    summary.final_loss = c.last_loss;
+    summary.seconds = timer.seconds();
+    if (o.progress) {
+        char extra[128];
+        std::snprintf(extra, sizeof extra, "final loss %.6g%s%s", c.last_loss,
+                      summary.time_limited ? " (time limit)" : "", summary.stopped_early ? " (stopped early)" : "");
+        progress.finish(extra);
+    }
+    return summary;
+}
+
+} // namespace lb::nn

@@ -1,0 +1,98 @@
+#pragma once
+// The one training loop of latentbench: every learned component (the autoencoder, the
+// latent integrator, future learned baselines) supplies a Learner and gets epochs,
+// seeded shuffles, mini-batches, Adam, optional validation with early stopping and
+// best-weights restore, a time limit, progress lines and fingerprinted checkpoints.
+//
+// Per epoch e (0-based): the samples are shuffled (Fisher–Yates) with
+// Rng(epoch_seed(seed, e)) and split into ceil(S / batch_size) batches of near-equal
+// size (at most S / min_batch of them, so none is smaller than min_batch); the same Rng
+// is then passed to every batch (noise). Seeding per epoch makes a resumed run draw
+// exactly the batches and noise of an uninterrupted one. The epoch loss is the
+// batch-size-weighted mean of the batch losses.
+//
+// Validation (if the learner has it): after every epoch; the best epoch's weights are
+// snapshotted by the learner and restored at the end; with patience > 0, training stops
+// after `patience` epochs without improvement.
+//
+// Checkpoints (nn/checkpoint.hpp): every checkpoint_every epochs and at the end (not
+// after an interruption), written atomically. Contents: the fingerprint, the counters,
+// parameters ("param/<name>"), Adam moments and step, plus the learner's extra state.
+// At the start an existing checkpoint is resumed only if resume is on, its fingerprint
+// matches and every tensor has the expected shape (checked before anything is copied);
+// otherwise it is set aside as `<path>.stale` with a log line giving the reason.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/rng.hpp"
+#include "io/hdf5.hpp"
+#include "nn/checkpoint.hpp"
+#include "nn/layer.hpp"
+
+namespace lb::nn {
+
+class Learner {
+public:
+    virtual ~Learner() = default;
+    /// Number of training samples S (shuffled and batched by the loop).
+    virtual Index num_samples() const = 0;
+    /// Trainable parameters (references stay valid during training); Adam updates them.
+    virtual std::vector<ParameterRef> parameters() = 0;
+    /// Loss of the samples `indices` in training mode, parameter gradients ACCUMULATED
+    /// (the loop zeroes them before). `rng` is the epoch's stream (e.g. for noise).
+    virtual double loss_and_gradient(const std::vector<Index>& indices, Rng& rng) = 0;
+
+    /// Validation: if true, validation_loss() is called after every epoch (eval mode),
+    /// and snapshot_best()/restore_best() keep the best epoch's weights.
+    virtual bool has_validation() const { return false; }
+    virtual double validation_loss() { return 0.0; }
+    virtual void snapshot_best() { }
+    virtual void restore_best() { }
+
+    /// State besides parameters and optimiser (BatchNorm statistics, best weights).
+    virtual void save_state(h5::File& /*file*/) { }
+    /// Restore what save_state wrote, all or nothing: on a name or shape difference throw
+    /// CheckpointMismatch (IoError if unreadable) before changing anything.
+    virtual void load_state(const h5::File& /*file*/) { }
+};
+
+struct TrainingLoopOptions {
+    std::string label = "train";  ///< progress lines and messages
+    int epochs = 100;
+    Index batch_size = 256;
+    Index min_batch = 1;          ///< 2 for training-mode BatchNorm
+    double learning_rate = 1e-3;
+    std::uint64_t seed = 0;
+    int patience = 0;             ///< 0: no early stopping
+    double max_seconds = 0.0;     ///< 0: no time limit
+    std::string checkpoint_path;  ///< empty: no checkpoints
+    int checkpoint_every = 100;
+    bool resume = true;
+    bool progress = true;
+    std::function<bool(int epochs_done)> interrupt;
+};
+
+struct TrainingLoopSummary {
+    int epochs_run = 0;            ///< epochs completed in total (resumed ones included)
+    int best_epoch = 0;            ///< with validation: the epoch whose weights were kept
+    double best_validation = 0.0;
+    double final_loss = 0.0;       ///< the last epoch's training loss
+    double seconds = 0.0;
+    bool resumed = false;
+    bool stopped_early = false;
+    bool time_limited = false;
+    bool interrupted = false;
+    std::string checkpoint_refused;
+};
+
+/// The RNG seed of epoch `epoch` (splitmix64 of the two).
+std::uint64_t epoch_seed(std::uint64_t seed, int epoch);
+
+/// Train `learner`; `fingerprint` identifies everything the numbers depend on (nn/checkpoint.hpp).
+/// Throws NumericalError if the loss becomes non-finite.
+TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOptions& options,
+                                      const Fingerprint& fingerprint);
+
+} // namespace lb::nn
