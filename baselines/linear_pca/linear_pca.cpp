@@ -12,7 +12,50 @@ namespace lb {
 
 namespace {
 constexpr const char* kFormat = "latentbench.linear_pca/1";
-}
+
+/// One step's reduced problem over the subspace coordinates q (d):
+///   f(q) = E(J q + c),  ∇f = Jᵀ∇E,  ∇²f = Jᵀ ∇²E J  (d × d, dense),
+/// E the incremental potential, ∇²E assembled over every DOF (prescribed rows of J
+/// are zero). A view for one step: the references must outlive it.
+class ReducedObjective final : public Objective {
+public:
+    ReducedObjective(const MatrixXd& J, const VectorXd& c, const IncrementalPotential& potential,
+                     HessianAssembler& assembler)
+        : m_J(J), m_c(c), m_potential(potential), m_assembler(assembler)
+    {
+    }
+
+    /// x = J q + c (3N), valid until the next evaluation.
+    const VectorXd& decode(const Eigen::Ref<const VectorXd>& q)
+    {
+        m_x.noalias() = m_J * q;
+        m_x += m_c;
+        return m_x;
+    }
+
+    Index dimension() const override { return m_J.cols(); }
+    double value(const Eigen::Ref<const VectorXd>& q) override { return m_potential.value(decode(q)); }
+    void gradient(const Eigen::Ref<const VectorXd>& q, Eigen::Ref<VectorXd> g) override
+    {
+        g.noalias() = m_J.transpose() * m_potential.gradient(decode(q));
+    }
+    HessianKind hessian_kind() const override { return HessianKind::Dense; }
+    void dense_hessian(const Eigen::Ref<const VectorXd>& q, bool project_psd, MatrixXd& H) override
+    {
+        m_assembler.assemble(m_potential.terms(), decode(q), project_psd);
+        H.noalias() = m_J.transpose() * (m_assembler.matrix().selfadjointView<Eigen::Lower>() * m_J);
+    }
+    /// The largest vertex displacement of a step: ||J dq||_∞.
+    double step_length(const Eigen::Ref<const VectorXd>& dq) override { return (m_J * dq).cwiseAbs().maxCoeff(); }
+
+private:
+    const MatrixXd& m_J;
+    const VectorXd& m_c;
+    const IncrementalPotential& m_potential;
+    HessianAssembler& m_assembler;
+    VectorXd m_x;
+};
+} // namespace
 
 LinearPcaSubspace LinearPcaSubspace::fit(const Dataset& data, Index dim)
 {
@@ -79,6 +122,11 @@ LinearPcaIntegrator::LinearPcaIntegrator(std::string name, const PhysicsModel& m
     // Every DOF is an unknown of the full-space Hessian; rows of prescribed DOFs of J are zero.
     VectorXi all = VectorXi::LinSpaced(model.num_dofs(), 0, int(model.num_dofs() - 1));
     m_assembler = std::make_unique<HessianAssembler>(all, m_potential.terms());
+    m_newton.max_iterations = options.max_iterations;
+    m_newton.gradient_tolerance = options.gradient_tolerance;
+    m_newton.step_tolerance = options.step_tolerance;
+    m_newton.force_scale = model.force_scale();
+    m_newton.length_scale = model.length_scale();
 }
 
 VectorXd LinearPcaIntegrator::offset(const BoundaryState& bc) const
@@ -116,89 +164,39 @@ void LinearPcaIntegrator::prepare_step(const BoundaryState& bc)
 double LinearPcaIntegrator::reduced_value(const VectorXd& q, const BoundaryState& bc, VectorXd* gradient)
 {
     prepare_step(bc);
-    const VectorXd x = m_J * q + m_c;
-    if (gradient) *gradient = m_J.transpose() * m_potential.gradient(x);
-    return m_potential.value(x);
+    ReducedObjective objective(m_J, m_c, m_potential, *m_assembler);  // the one step() minimises
+    if (gradient) {
+        gradient->resize(dim());
+        objective.gradient(q, *gradient);
+    }
+    return objective.value(q);
 }
 
 StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
 {
     Timer timer;
     prepare_step(bc);
-    const double force_tol = m_options.gradient_tolerance * m_model.force_scale();
-    const double step_tol = m_options.step_tolerance * m_model.length_scale();
+    ReducedObjective objective(m_J, m_c, m_potential, *m_assembler);
     // Warm start: constant-velocity extrapolation in the subspace.
     VectorXd q = 2.0 * m_q - m_q_prev;
-    VectorXd x = m_J * q + m_c;
-    double value = m_potential.value(x);
-    if (!std::isfinite(value)) {  // fall back to the previous state
-        q = m_q;
-        x = m_J * q + m_c;
-        value = m_potential.value(x);
-    }
-    bool converged = false;
-    VectorXd x_try(x.size());
+    if (!std::isfinite(objective.value(q))) q = m_q;  // fall back to the previous state
     ++m_steps;
-    for (int it = 0; it < m_options.max_iterations && !converged; ++it) {
-        const VectorXd g = m_J.transpose() * m_potential.gradient(x);
-        if (!g.allFinite() || !std::isfinite(value)) {
-            // The subspace state blew up: report a non-finite state, which ends the
-            // rollout's stable horizon (eval/rollout.cpp) instead of aborting a suite.
-            q.setConstant(std::numeric_limits<double>::quiet_NaN());
-            x.setConstant(std::numeric_limits<double>::quiet_NaN());
-            break;
-        }
-        if (g.norm() <= force_tol) {
-            converged = true;
-            break;
-        }
-        // Exact reduced Hessian first (quadratic convergence); if it is not positive
-        // definite, the one of PSD-projected element Hessians, shifted if still singular.
-        Eigen::LDLT<MatrixXd> ldlt;
-        MatrixXd H;
-        for (bool project : {false, true}) {
-            m_assembler->assemble(m_potential.terms(), x, project);
-            H.noalias() = m_J.transpose() * (m_assembler->matrix().selfadjointView<Eigen::Lower>() * m_J);
-            ldlt.compute(H);
-            if (ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0.0).all()) break;
-        }
-        double shift = 1e-10 * std::max(H.diagonal().cwiseAbs().maxCoeff(), 1e-300);
-        while (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) {
-            if (!H.allFinite() || shift > 1e6 * std::max(H.diagonal().cwiseAbs().maxCoeff(), 1.0))
-                break;  // caught below: the step direction is not finite or not a descent
-            H.diagonal().array() += shift;
-            shift *= 10.0;
-            ldlt.compute(H);
-        }
-        ++m_iterations;
-        const VectorXd dq = -ldlt.solve(g);
-        const double slope = g.dot(dq);
-        if (!dq.allFinite() || !(slope < 0.0)) break;  // no descent direction: counted as unconverged
-        double alpha = 1.0;
-        bool accepted = false;
-        for (int ls = 0; ls < 40; ++ls) {
-            x_try.noalias() = m_J * (q + alpha * dq);
-            x_try += m_c;
-            const double v_try = m_potential.value(x_try);
-            if (std::isfinite(v_try) && v_try <= value + 1e-4 * alpha * slope) {
-                q += alpha * dq;
-                x = x_try;
-                value = v_try;
-                accepted = true;
-                break;
-            }
-            alpha *= 0.5;
-        }
-        const double moved = (alpha * (m_J * dq)).cwiseAbs().maxCoeff();
-        if (!accepted || moved <= step_tol) {
-            converged = accepted || moved <= step_tol;
-            break;
-        }
+    const SolveSummary summary = minimize_newton(objective, q, m_newton, &m_workspace);
+    m_iterations += summary.iterations;
+    VectorXd x;
+    if (summary.termination == SolveTermination::NonFinite) {
+        // The subspace state blew up: report a non-finite state, which ends the
+        // rollout's stable horizon (eval/rollout.cpp) instead of aborting a suite.
+        q.setConstant(std::numeric_limits<double>::quiet_NaN());
+        x.setConstant(m_model.num_dofs(), std::numeric_limits<double>::quiet_NaN());
+    } else {
+        x = objective.decode(q);
     }
-    if (!converged) {
+    if (!summary.converged()) {
         if (m_unconverged == 0)
-            log_warn("linear_pca '%s': a reduced Newton solve stopped before converging (the total is reported after the rollouts)",
-                     m_name.c_str());
+            log_warn("linear_pca '%s': a reduced Newton solve stopped before converging (%s; the total is reported "
+                     "after the rollouts)",
+                     m_name.c_str(), summary.brief().c_str());
         ++m_unconverged;
     }
     m_q_prev = m_q;

@@ -9,8 +9,9 @@
 // Step: q_t = argmin_q E(x(q)), E the incremental potential of implicit Euler with
 // x_{t−1}, x_{t−2} the previous subspace states; for cloth and solids with the
 // Dirichlet penalty w_bc Σ_B |x_i − x*_i|² (the subspace cannot pin vertices), for
-// rods with the roots prescribed by the encoding. Newton on the reduced system
-//   g = Jᵀ∇E,  H = Jᵀ ∇²E J  (element Hessians projected to PSD),
+// rods with the roots prescribed by the encoding. Newton (minimize_newton,
+// solver/newton.hpp) on the reduced objective f(q) = E(J q + c_t),
+//   g = Jᵀ∇E,  H = Jᵀ ∇²E J  (exact first, element Hessians projected to PSD on failure),
 // d × d dense, with Armijo backtracking; converged when ||g|| ≤ gradient_tolerance ·
 // force scale (J has orthonormal columns, so this is the full-space test restricted to
 // the subspace) or the step moves no vertex by more than step_tolerance · length scale.
@@ -24,6 +25,7 @@
 #include "latent/bc_encoding.hpp"
 #include "latent/pca.hpp"
 #include "sim/dataset.hpp"
+#include "solver/newton.hpp"
 
 namespace lb::h5 {
 class File;
@@ -34,8 +36,12 @@ namespace lb {
 struct LinearPcaOptions {
     Index dim = 4;                ///< subspace dimension d (clamped to the data's rank)
     double penalty_weight = 1e5;  ///< w_bc (cloth, solids; rods use hard roots)
+    /// Reduced Newton iterations per step; the other Newton settings are
+    /// NewtonOptions' defaults.
     int max_iterations = 50;
+    /// Converged when ||Jᵀ∇E|| ≤ gradient_tolerance · force scale (PhysicsModel::force_scale).
     double gradient_tolerance = 1e-8;
+    /// Converged when a step moves no vertex by more than step_tolerance · length scale.
     double step_tolerance = 1e-9;
 };
 
@@ -70,8 +76,8 @@ public:
     /// The reduced objective E(J q + c) and its gradient Jᵀ∇E for the current step's
     /// potential (after reset(), for the boundary `bc`): exposed for derivative tests.
     double reduced_value(const VectorXd& q, const BoundaryState& bc, VectorXd* gradient);
-    /// Steps (since construction, over every reset) whose Newton solve stopped at
-    /// max_iterations or a failed line search.
+    /// Steps (since construction, over every reset) whose Newton solve did not
+    /// converge (iteration cap, failed line search or factorisation, non-finite state).
     int unconverged_steps() const { return m_unconverged; }
     Index dim() const { return m_J.cols(); }
     /// Mean reduced Newton iterations per step since construction.
@@ -91,6 +97,8 @@ private:
     BcRelativeEncoding m_encoding;
     IncrementalPotential m_potential;
     std::unique_ptr<HessianAssembler> m_assembler;
+    NewtonOptions m_newton;  ///< from m_options and the model's scales
+    NewtonWorkspace m_workspace;
     MatrixXd m_J;  ///< 3N × d
     VectorXd m_q, m_q_prev, m_x, m_x_prev, m_x_prev2, m_c;
     int m_unconverged = 0;

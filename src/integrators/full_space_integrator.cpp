@@ -22,7 +22,7 @@ StepTiming FullSpaceIntegrator::step(const BoundaryState& bc)
     Timer timer;
     const MatrixX3d targets = Eigen::Map<const MatrixX3d>(bc.targets.data(), bc.targets.size() / 3, 3);
     m_summary = m_sim.step(m_x_prev, m_x_prev2, targets, m_x);
-    if (m_summary.termination == NewtonTermination::NonFinite) {
+    if (m_summary.termination == SolveTermination::NonFinite) {
         // A non-finite state (e.g. started from one) ends the rollout like any method's.
         m_x.setConstant(std::numeric_limits<double>::quiet_NaN());
     } else if (!m_summary.converged()) {

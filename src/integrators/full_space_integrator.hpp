@@ -17,12 +17,12 @@ public:
     StepTiming step(const BoundaryState& bc) override;
     const VectorXd& positions() const override { return m_x; }
     const VectorXd& latent() const override { return m_empty; }
-    const NewtonSummary& last_summary() const { return m_summary; }
+    const SolveSummary& last_summary() const { return m_summary; }
 
 private:
     FullSpaceSimulator m_sim;
     VectorXd m_x, m_x_prev, m_x_prev2, m_empty;
-    NewtonSummary m_summary;
+    SolveSummary m_summary;
 };
 
 } // namespace lb

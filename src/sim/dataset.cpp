@@ -49,7 +49,7 @@ Dataset simulate_scene(const Scene& scene, const SimulateOptions& options)
         int total_iterations = 0;
         VectorXd x;
         for (int t = 1; t < frames; ++t) {
-            const NewtonSummary summary = sim.step(x_prev, x_prev2, traj.targets[size_t(t)], x);
+            const SolveSummary summary = sim.step(x_prev, x_prev2, traj.targets[size_t(t)], x);
             seq.newton.row(t) << summary.iterations, summary.residual, summary.seconds;
             total_iterations += summary.iterations;
             if (!summary.converged()) {

@@ -16,8 +16,8 @@ FullSpaceSimulator::FullSpaceSimulator(const PhysicsModel& model, NewtonOptions 
 {
 }
 
-NewtonSummary FullSpaceSimulator::step(const VectorXd& x_prev, const VectorXd& x_prev2,
-                                       const MatrixX3d& bc_targets, VectorXd& x)
+SolveSummary FullSpaceSimulator::step(const VectorXd& x_prev, const VectorXd& x_prev2,
+                                      const MatrixX3d& bc_targets, VectorXd& x)
 {
     m_potential.set_previous(x_prev, x_prev2);
     x = m_potential.x_tilde();

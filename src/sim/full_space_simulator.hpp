@@ -1,7 +1,7 @@
 #pragma once
 // Full-space implicit Euler: each step minimises the incremental potential
-// over the free DOFs with Newton (Dirichlet DOFs removed and set to their
-// prescribed values).
+// over the free DOFs with Newton (NewtonSolver: the potential as a
+// FreeDofObjective, Dirichlet DOFs removed and set to their prescribed values).
 #include "sim/physics_model.hpp"
 #include "solver/newton.hpp"
 
@@ -14,8 +14,8 @@ public:
 
     /// One step: x = argmin E(x; x_prev, x_prev2) with x_B = bc_targets (B×3).
     /// Warm start x̃ with boundary values set. x is resized and overwritten.
-    NewtonSummary step(const VectorXd& x_prev, const VectorXd& x_prev2, const MatrixX3d& bc_targets,
-                       VectorXd& x);
+    SolveSummary step(const VectorXd& x_prev, const VectorXd& x_prev2, const MatrixX3d& bc_targets,
+                      VectorXd& x);
 
     const PhysicsModel& model() const { return m_model; }
     const IncrementalPotential& potential() const { return m_potential; }

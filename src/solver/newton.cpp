@@ -1,165 +1,251 @@
 #include "solver/newton.hpp"
 
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <stdexcept>
 
 #include "core/timer.hpp"
+#include "solver/free_dof_objective.hpp"
 
 namespace lb {
 
-std::string to_string(NewtonTermination t)
-{
-    switch (t) {
-    case NewtonTermination::Converged: return "converged";
-    case NewtonTermination::SmallStep: return "small step";
-    case NewtonTermination::MaxIterations: return "iteration cap reached";
-    case NewtonTermination::LineSearchFailed: return "line search failed";
-    case NewtonTermination::FactorizationFailed: return "factorisation failed";
-    case NewtonTermination::NonFinite: return "non-finite energy or gradient";
-    }
-    return "unknown";
-}
+namespace {
 
-std::string NewtonSummary::brief() const
-{
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "%s in %d it, residual %.3g, %d halvings, %d regularisations, %.2f ms",
-                  to_string(termination).c_str(), iterations, residual, line_search_halvings,
-                  regularizations, seconds * 1e3);
-    return message.empty() ? buf : std::string(buf) + " (" + message + ")";
-}
+/// Floor of the mean |diagonal| that μ is relative to, so that μ > 0 even for an
+/// all-zero diagonal.
+constexpr double kTinyDiagonal = 1e-300;
 
-NewtonSolver::NewtonSolver(const VectorXi& dof_to_unknown, const EnergySum& energies,
-                           NewtonOptions options)
-    : m_options(options), m_assembler(dof_to_unknown, energies)
+/// dx = −H⁻¹g with H the current matrix, shifted by μI (μ growing from
+/// initial_regularization · mean_diag by regularization_growth) while it does not
+/// factorise or gives no descent direction, if `regularize`; false if no descent
+/// direction was found (with summary.message set if the failure is fatal).
+/// `shift(d)` adds d to the diagonal, `factorize()` returns a FactorStatus (and the
+/// message of a fatal one), `solve(g, dx)` sets dx = H⁻¹g.
+template <class Shift, class Factorize, class Solve>
+bool regularized_direction(double mean_diag, bool regularize, const NewtonOptions& opt, const VectorXd& g,
+                           VectorXd& dx, SolveSummary& summary, Shift shift, Factorize factorize, Solve solve)
 {
-    const SparseMatrixd& A = m_assembler.matrix();
-    m_diagonal.resize(size_t(A.cols()));
-    for (Index j = 0; j < A.cols(); ++j) {
-        // Lower triangle, sorted: the diagonal is the first entry of each column.
-        m_diagonal[size_t(j)] = A.outerIndexPtr()[j];
-    }
-    m_cholesky.analyze(A);
-}
-
-bool NewtonSolver::solve_direction(const VectorXd& g, bool regularize, VectorXd& dx, NewtonSummary& summary)
-{
-    SparseMatrixd& A = m_assembler.mutable_matrix();
-    double mean_diag = 0.0;
-    for (Index i : m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
-    mean_diag = std::max(mean_diag / double(std::max<size_t>(m_diagonal.size(), 1)), 1e-300);
+    mean_diag = std::max(mean_diag, kTinyDiagonal);
     double mu = 0.0;
-    const int attempts = regularize ? m_options.max_regularizations : 0;
+    const int attempts = regularize ? opt.max_regularizations : 0;
     for (int attempt = 0; attempt <= attempts; ++attempt) {
         if (attempt > 0) {
-            const double next_mu = mu == 0.0 ? m_options.initial_regularization * mean_diag : mu * 10.0;
-            for (Index i : m_diagonal) A.valuePtr()[i] += next_mu - mu;
+            const double next_mu = mu == 0.0 ? opt.initial_regularization * mean_diag : mu * opt.regularization_growth;
+            shift(next_mu - mu);
             mu = next_mu;
             ++summary.regularizations;
         }
-        const FactorStatus status = m_cholesky.factorize(A);
+        std::string message;
+        const FactorStatus status = factorize(message);
         if (status == FactorStatus::Fatal) {
-            summary.message = m_cholesky.message();
+            summary.message = message;
             return false;
         }
         if (status == FactorStatus::Success) {
-            dx = -m_cholesky.solve(g);
+            solve(g, dx);
+            dx = -dx;
             if (dx.allFinite() && g.dot(dx) < 0.0) return true;
         }
     }
     return false;
 }
 
-NewtonSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
+} // namespace
+
+NewtonWorkspace::NewtonWorkspace() = default;
+NewtonWorkspace::~NewtonWorkspace() = default;
+NewtonWorkspace::NewtonWorkspace(NewtonWorkspace&&) noexcept = default;
+NewtonWorkspace& NewtonWorkspace::operator=(NewtonWorkspace&&) noexcept = default;
+
+void NewtonWorkspace::analyze(const SparseMatrixd& lower)
+{
+    if (!lower.isCompressed() || lower.rows() != lower.cols())
+        throw std::invalid_argument("Newton: the sparse Hessian must be square and compressed");
+    const auto* outer = lower.outerIndexPtr();
+    const auto* inner = lower.innerIndexPtr();
+    m_diagonal.resize(size_t(lower.cols()));
+    for (Index j = 0; j < lower.cols(); ++j) {
+        // Lower triangle, sorted: the diagonal is the first entry of each column.
+        if (outer[j] == outer[j + 1] || inner[outer[j]] != j)
+            throw std::invalid_argument("Newton: the sparse Hessian must store the diagonal entry first in column " +
+                                        std::to_string(j) + " (lower triangle, sorted)");
+        m_diagonal[size_t(j)] = outer[j];
+    }
+    if (!m_cholesky) m_cholesky = std::make_unique<SparseCholesky>();
+    m_cholesky->analyze(lower);
+    m_outer.assign(outer, outer + lower.cols() + 1);
+    m_inner.assign(inner, inner + lower.nonZeros());
+}
+
+void NewtonWorkspace::ensure_analyzed(const SparseMatrixd& lower)
+{
+    const bool same = m_cholesky && lower.isCompressed() && size_t(lower.cols()) + 1 == m_outer.size() &&
+                      size_t(lower.nonZeros()) == m_inner.size() &&
+                      std::equal(m_outer.begin(), m_outer.end(), lower.outerIndexPtr()) &&
+                      std::equal(m_inner.begin(), m_inner.end(), lower.innerIndexPtr());
+    if (!same) analyze(lower);
+}
+
+SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt, NewtonWorkspace* workspace)
 {
     Timer timer;
-    NewtonSummary summary;
-    const NewtonOptions& opt = m_options;
+    SolveSummary summary;
+    const HessianKind kind = f.hessian_kind();
+    if (kind == HessianKind::None || x.size() != f.dimension()) {
+        summary.termination = SolveTermination::Failed;
+        summary.message = kind == HessianKind::None
+                              ? "Newton needs a Hessian and this objective has none (use minimize_lbfgs)"
+                              : "x has " + std::to_string(x.size()) + " entries, the objective " +
+                                    std::to_string(f.dimension()) + " unknowns";
+        return summary;
+    }
+    NewtonWorkspace local;
+    NewtonWorkspace& ws = workspace ? *workspace : local;
     const double gtol = opt.gradient_tolerance * opt.force_scale;
+    const double step_tol = opt.step_tolerance * opt.length_scale;
 
-    double energy = energies.value(x);
-    VectorXd g = m_assembler.restrict(energies.gradient(x));
+    // dx for the Hessian (exact or projected) at x; see regularized_direction.
+    auto find_direction = [&](bool project_psd, bool regularize) {
+        VectorXd& dx = ws.m_dx;
+        if (kind == HessianKind::Sparse) {
+            SparseMatrixd& A = f.sparse_hessian(x, project_psd);
+            ws.ensure_analyzed(A);
+            double mean_diag = 0.0;
+            for (Index i : ws.m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
+            mean_diag /= double(std::max<size_t>(ws.m_diagonal.size(), 1));
+            return regularized_direction(
+                mean_diag, regularize, opt, ws.m_g, dx, summary,
+                [&](double d) {
+                    for (Index i : ws.m_diagonal) A.valuePtr()[i] += d;
+                },
+                [&](std::string& message) {
+                    const FactorStatus status = ws.m_cholesky->factorize(A);
+                    message = ws.m_cholesky->message();
+                    return status;
+                },
+                [&](const VectorXd& b, VectorXd& out) { out = ws.m_cholesky->solve(b); });
+        }
+        MatrixXd& H = ws.m_dense;
+        f.dense_hessian(x, project_psd, H);
+        const double mean_diag = H.size() ? H.diagonal().cwiseAbs().mean() : 0.0;
+        return regularized_direction(
+            mean_diag, regularize, opt, ws.m_g, dx, summary, [&](double d) { H.diagonal().array() += d; },
+            [&](std::string& message) {
+                if (!H.allFinite()) {
+                    message = "non-finite entry in the Hessian";
+                    return FactorStatus::Fatal;
+                }
+                ws.m_ldlt.compute(H);
+                const bool ok = ws.m_ldlt.info() == Eigen::Success && (ws.m_ldlt.vectorD().array() > 0.0).all();
+                return ok ? FactorStatus::Success : FactorStatus::NotPositiveDefinite;
+            },
+            [&](const VectorXd& b, VectorXd& out) { out = ws.m_ldlt.solve(b); });
+    };
+
+    VectorXd& g = ws.m_g;
+    g.resize(x.size());
+    double energy = f.value(x);
+    ++summary.evaluations;
+    f.gradient(x, g);
+    bool stopped = false;
     for (summary.iterations = 0; summary.iterations < opt.max_iterations; ++summary.iterations) {
         const double gnorm = g.norm();
         summary.residual = gnorm / opt.force_scale;
         if (!std::isfinite(energy) || !std::isfinite(gnorm)) {
-            summary.termination = NewtonTermination::NonFinite;
+            summary.termination = SolveTermination::NonFinite;
+            stopped = true;
             break;
         }
         if (gnorm <= gtol) {
-            summary.termination = NewtonTermination::Converged;
+            summary.termination = SolveTermination::Converged;
+            stopped = true;
             break;
         }
 
         // Newton direction: exact Hessian first (Adaptive), then projected, then
         // regularised with μI until it factorises and gives a descent direction.
-        VectorXd dx;
-        bool have_direction = false;
         // Every iteration tries the exact Hessian first: staying on the projected one
         // after a failure (to save a factorisation) made the full cloth scene stall at
         // the iteration cap (frame 677, residual 1.6e-5) — projection costs quadratic
         // convergence.
         const bool try_exact = opt.projection != NewtonOptions::Projection::Always;
         const bool allow_projected = opt.projection != NewtonOptions::Projection::Never;
-        if (try_exact) {
-            m_assembler.assemble(energies, x, false);
-            have_direction = solve_direction(g, /*regularize=*/!allow_projected, dx, summary);
-        }
+        bool have_direction = false;
+        if (try_exact) have_direction = find_direction(false, /*regularize=*/!allow_projected);
         if (!have_direction && allow_projected && summary.message.empty()) {
-            m_assembler.assemble(energies, x, true);
             ++summary.projected_iterations;
-            have_direction = solve_direction(g, /*regularize=*/true, dx, summary);
+            have_direction = find_direction(true, /*regularize=*/true);
         }
         if (!have_direction) {
-            summary.termination = NewtonTermination::FactorizationFailed;
+            summary.termination = SolveTermination::FactorizationFailed;
             if (summary.message.empty()) summary.message = "no descent direction after regularisation";
+            stopped = true;
             break;
         }
 
-        // Backtracking Armijo line search on the full energy.
+        // Backtracking Armijo line search. The step α dx is formed before it is added
+        // so that x + α dx rounds the same way for every objective.
+        const VectorXd& dx = ws.m_dx;
         const double slope = g.dot(dx);
         double alpha = 1.0;
-        VectorXd x_trial = x;
         double trial_energy = energy;
         bool accepted = false;
         for (int ls = 0; ls < opt.max_line_search; ++ls) {
-            x_trial = x;
-            m_assembler.add_prolonged(alpha * dx, x_trial);
-            trial_energy = energies.value(x_trial);
+            ws.m_step.noalias() = alpha * dx;
+            ws.m_x_trial.noalias() = x + ws.m_step;
+            trial_energy = f.value(ws.m_x_trial);
+            ++summary.evaluations;
             if (std::isfinite(trial_energy) && trial_energy <= energy + opt.armijo_c * alpha * slope) {
                 accepted = true;
                 break;
             }
-            alpha *= 0.5;
+            alpha *= opt.backtracking_factor;
             ++summary.line_search_halvings;
         }
-        const double step = alpha * dx.lpNorm<Eigen::Infinity>();
+        const double full_step = f.step_length(dx);
         if (!accepted) {
             // At the precision floor the energy cannot decrease measurably: a tiny
             // full step means we are converged to round-off.
-            if (dx.lpNorm<Eigen::Infinity>() <= opt.step_tolerance * opt.length_scale * 1e3) {
-                summary.termination = NewtonTermination::SmallStep;
+            if (full_step <= opt.small_step_factor * step_tol) {
+                summary.termination = SolveTermination::SmallStep;
             } else {
-                summary.termination = NewtonTermination::LineSearchFailed;
+                summary.termination = SolveTermination::LineSearchFailed;
                 summary.message = "no sufficient decrease after " + std::to_string(opt.max_line_search) + " halvings";
             }
+            stopped = true;
             break;
         }
-        x.swap(x_trial);
+        x.swap(ws.m_x_trial);
         energy = trial_energy;
-        g = m_assembler.restrict(energies.gradient(x));
-        if (step <= opt.step_tolerance * opt.length_scale) {
+        f.gradient(x, g);
+        if (alpha * full_step <= step_tol) {
             summary.residual = g.norm() / opt.force_scale;
-            summary.termination = NewtonTermination::SmallStep;
+            summary.termination = SolveTermination::SmallStep;
             ++summary.iterations;
+            stopped = true;
             break;
         }
     }
-    if (summary.iterations >= opt.max_iterations) {
+    if (!stopped) {
         summary.residual = g.norm() / opt.force_scale;
-        summary.termination = g.norm() <= gtol ? NewtonTermination::Converged : NewtonTermination::MaxIterations;
+        summary.termination = g.norm() <= gtol ? SolveTermination::Converged : SolveTermination::MaxIterations;
     }
     summary.seconds = timer.seconds();
+    return summary;
+}
+
+NewtonSolver::NewtonSolver(const VectorXi& dof_to_unknown, const EnergySum& energies, NewtonOptions options)
+    : m_options(options), m_assembler(dof_to_unknown, energies)
+{
+    m_workspace.analyze(m_assembler.matrix());
+}
+
+SolveSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
+{
+    FreeDofObjective objective(m_assembler, energies, x);
+    VectorXd y = objective.unknowns(x);
+    const SolveSummary summary = minimize_newton(objective, y, m_options, &m_workspace);
+    x = objective.full_state(y);
     return summary;
 }
 

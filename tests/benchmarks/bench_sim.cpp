@@ -35,7 +35,7 @@ void full_space_step(benchmark::State& state, const std::string& scene_name, con
     constexpr int kWarmup = 5;
     int t = 1;
     auto advance = [&]() {
-        const NewtonSummary s = sim.step(x_prev, x_prev2, traj.targets[size_t(t)], x);
+        const SolveSummary s = sim.step(x_prev, x_prev2, traj.targets[size_t(t)], x);
         x_prev2.swap(x_prev);
         x_prev = x;
         t = t + 1 < seq.frames ? t + 1 : 1;
@@ -44,7 +44,7 @@ void full_space_step(benchmark::State& state, const std::string& scene_name, con
     for (int i = 0; i < kWarmup; ++i) advance();
     long iterations = 0, steps = 0;
     for (auto _ : state) {
-        const NewtonSummary s = advance();
+        const SolveSummary s = advance();
         if (!s.converged()) {
             state.SkipWithError(("Newton failed: " + s.brief()).c_str());
             break;

@@ -49,7 +49,7 @@ double computed_deflection(int nx, int nyz)
     options.gradient_tolerance = 1e-10;
     NewtonSolver newton(dof_to_unknown, energy, options);
     VectorXd x = flatten(mesh.rest_positions);
-    const NewtonSummary summary = newton.minimize(energy, x);
+    const SolveSummary summary = newton.minimize(energy, x);
     EXPECT_TRUE(summary.converged()) << summary.brief();
 
     double sum = 0.0;
