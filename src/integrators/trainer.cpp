@@ -326,6 +326,7 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     loop.label = "train " + to_string(m_options.loss);
     loop.epochs = m_options.epochs;
     loop.batch_size = m_options.batch_size;
+    loop.drop_last = true;  // floor(S / batch) Adam steps per epoch, as the published tables were trained
     loop.learning_rate = m_options.learning_rate;
     loop.seed = m_options.seed;
     loop.max_seconds = m_options.max_seconds;

@@ -105,18 +105,86 @@ std::uint64_t epoch_seed(std::uint64_t seed, int epoch)
     return z ^ (z >> 31);
 }
 
-TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOptions& o, const Fingerprint& fingerprint)
+namespace {
+
+/// ConfigError naming the option; returns the smallest batch.
+Index check_options(const TrainingLoopOptions& o, Index num_samples)
 {
+    const Index min_batch = std::max<Index>(o.min_batch, 1);
     if (o.epochs < 0) throw ConfigError(o.label + ": epochs must be ≥ 0");
-    if (o.batch_size < std::max<Index>(o.min_batch, 1))
-        throw ConfigError(o.label + ": batch_size must be ≥ " + std::to_string(std::max<Index>(o.min_batch, 1)));
+    if (o.batch_size < min_batch) throw ConfigError(o.label + ": batch_size must be ≥ " + std::to_string(min_batch));
     if (!(o.learning_rate > 0.0) || !std::isfinite(o.learning_rate))
         throw ConfigError(o.label + ": learning_rate must be positive and finite");
     if (o.checkpoint_every < 1) throw ConfigError(o.label + ": checkpoint_every must be ≥ 1");
-    const Index S = learner.num_samples();
-    const Index min_batch = std::max<Index>(o.min_batch, 1);
-    if (S < min_batch) throw ConfigError(o.label + ": need at least " + std::to_string(min_batch) + " samples");
+    if (num_samples < min_batch) throw ConfigError(o.label + ": need at least " + std::to_string(min_batch) + " samples");
+    return min_batch;
+}
 
+/// Batch boundaries into an epoch's shuffled order: [bounds[b], bounds[b+1]).
+std::vector<Index> batch_bounds(const TrainingLoopOptions& o, Index S, Index min_batch)
+{
+    std::vector<Index> bounds{0};
+    if (o.drop_last) {
+        const Index full = S / o.batch_size;
+        if (full == 0) return {0, S};
+        for (Index b = 1; b <= full; ++b) bounds.push_back(b * o.batch_size);
+        return bounds;
+    }
+    // ceil(S / batch_size) batches of near-equal size, none smaller than min_batch.
+    const Index num_batches = std::max<Index>(1, std::min((S + o.batch_size - 1) / o.batch_size, S / min_batch));
+    for (Index b = 0; b < num_batches; ++b) bounds.push_back(S * (b + 1) / num_batches);
+    return bounds;
+}
+
+/// One epoch: a seeded shuffle, then the mini-batches, one Adam step each. Returns the
+/// sample-weighted mean batch loss.
+double run_epoch(Learner& learner, Adam& adam, std::vector<Index>& order, const std::vector<Index>& bounds,
+                 std::uint64_t seed)
+{
+    const Index S = Index(order.size());
+    Rng rng(seed);
+    std::iota(order.begin(), order.end(), Index(0));
+    for (Index i = S - 1; i > 0; --i) std::swap(order[std::size_t(i)], order[std::size_t(rng.index(i + 1))]);
+    double weighted = 0.0;
+    for (std::size_t b = 0; b + 1 < bounds.size(); ++b) {
+        const std::vector<Index> idx(order.begin() + bounds[b], order.begin() + bounds[b + 1]);
+        adam.zero_grad();
+        weighted += learner.loss_and_gradient(idx, rng) * double(idx.size());
+        adam.step();
+    }
+    return weighted / double(bounds.back());
+}
+
+/// Track the best validation loss (snapshotting the learner's weights there).
+void track_validation(Learner& learner, double val, Counters& c)
+{
+    if (val < c.best_validation) {
+        c.best_validation = val;
+        c.best_epoch = c.epoch;
+        c.epochs_since_improvement = 0;
+        learner.snapshot_best();
+    } else {
+        ++c.epochs_since_improvement;
+    }
+}
+
+void report_epoch(Progress& progress, const Counters& c, bool validation, double val)
+{
+    char extra[160];
+    if (validation)
+        std::snprintf(extra, sizeof extra, "loss %.4e  validation %.4e (best %.4e @ %d)", c.last_loss, val,
+                      c.best_validation, c.best_epoch);
+    else
+        std::snprintf(extra, sizeof extra, "loss %.6g", c.last_loss);
+    progress.update(c.epoch, extra);
+}
+
+} // namespace
+
+TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOptions& o, const Fingerprint& fingerprint)
+{
+    const Index S = learner.num_samples();
+    const Index min_batch = check_options(o, S);
     Timer timer;
     TrainingLoopSummary summary;
     std::vector<ParameterRef> params = learner.parameters();
@@ -139,8 +207,7 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
         }
     }
 
-    // ceil(S / batch_size) batches of near-equal size, none smaller than min_batch.
-    const Index num_batches = std::max<Index>(1, std::min((S + o.batch_size - 1) / o.batch_size, S / min_batch));
+    const std::vector<Index> bounds = batch_bounds(o, S, min_batch);
     std::vector<Index> order(static_cast<std::size_t>(S));
     int last_saved = c.epoch;
     auto checkpoint = [&] {
@@ -151,45 +218,15 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
     auto early_stop = [&] { return validation && o.patience > 0 && c.epochs_since_improvement >= o.patience; };
     Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30);
     while (c.epoch < o.epochs && !early_stop()) {
-        Rng rng(epoch_seed(o.seed, c.epoch));
-        std::iota(order.begin(), order.end(), Index(0));
-        for (Index i = S - 1; i > 0; --i) std::swap(order[std::size_t(i)], order[std::size_t(rng.index(i + 1))]);
-        double weighted = 0.0;
-        Index begin = 0;
-        for (Index b = 0; b < num_batches; ++b) {
-            const Index end = S * (b + 1) / num_batches;
-            const std::vector<Index> idx(order.begin() + begin, order.begin() + end);
-            adam.zero_grad();
-            weighted += learner.loss_and_gradient(idx, rng) * double(end - begin);
-            adam.step();
-            begin = end;
-        }
+        c.last_loss = run_epoch(learner, adam, order, bounds, epoch_seed(o.seed, c.epoch));
         ++c.epoch;
-        c.last_loss = weighted / double(S);
         const double val = validation ? learner.validation_loss() : 0.0;
         if (!std::isfinite(c.last_loss) || !std::isfinite(val))
             throw NumericalError(o.label + ": the loss became non-finite at epoch " + std::to_string(c.epoch) +
                                  " (try a smaller learning rate)");
-        if (validation) {
-            if (val < c.best_validation) {
-                c.best_validation = val;
-                c.best_epoch = c.epoch;
-                c.epochs_since_improvement = 0;
-                learner.snapshot_best();
-            } else {
-                ++c.epochs_since_improvement;
-            }
-        }
+        if (validation) track_validation(learner, val, c);
         if (c.epoch % o.checkpoint_every == 0) checkpoint();
-        if (o.progress) {
-            char extra[160];
-            if (validation)
-                std::snprintf(extra, sizeof extra, "loss %.4e  validation %.4e (best %.4e @ %d)", c.last_loss, val,
-                              c.best_validation, c.best_epoch);
-            else
-                std::snprintf(extra, sizeof extra, "loss %.6g", c.last_loss);
-            progress.update(c.epoch, extra);
-        }
+        if (o.progress) report_epoch(progress, c, validation, val);
         if (o.interrupt && o.interrupt(c.epoch)) {
             summary.interrupted = true;
             break;

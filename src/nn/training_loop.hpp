@@ -63,6 +63,11 @@ struct TrainingLoopOptions {
     int epochs = 100;
     Index batch_size = 256;
     Index min_batch = 1;          ///< 2 for training-mode BatchNorm
+    /// false: ceil(S / batch_size) batches of near-equal size covering every sample;
+    /// true: floor(S / batch_size) batches of exactly batch_size, the incomplete rest of
+    /// each epoch's shuffle left out (one batch of all S if S < batch_size), so the Adam
+    /// steps per epoch do not depend on the remainder.
+    bool drop_last = false;
     double learning_rate = 1e-3;
     std::uint64_t seed = 0;
     int patience = 0;             ///< 0: no early stopping

@@ -86,17 +86,109 @@ void NewtonWorkspace::ensure_analyzed(const SparseMatrixd& lower)
     if (!same) analyze(lower);
 }
 
+/// dx = −H⁻¹g for the Hessian (exact or projected) at x, shifted by μI if `regularize`
+/// and needed (see regularized_direction); false if no descent direction was found.
+bool NewtonWorkspace::newton_direction(Objective& f, const VectorXd& x, bool project_psd, bool regularize,
+                                       const NewtonOptions& opt, SolveSummary& summary)
+{
+    NewtonWorkspace& ws = *this;
+    VectorXd& dx = ws.m_dx;
+    if (f.hessian_kind() == HessianKind::Sparse) {
+        SparseMatrixd& A = f.sparse_hessian(x, project_psd);
+        ws.ensure_analyzed(A);
+        double mean_diag = 0.0;
+        for (Index i : ws.m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
+        mean_diag /= double(std::max<size_t>(ws.m_diagonal.size(), 1));
+        return regularized_direction(
+            mean_diag, regularize, opt, ws.m_g, dx, summary,
+            [&](double d) {
+                for (Index i : ws.m_diagonal) A.valuePtr()[i] += d;
+            },
+            [&](std::string& message) {
+                const FactorStatus status = ws.m_cholesky->factorize(A);
+                message = ws.m_cholesky->message();
+                return status;
+            },
+            [&](const VectorXd& b, VectorXd& out) { out = ws.m_cholesky->solve(b); });
+    }
+    MatrixXd& H = ws.m_dense;
+    f.dense_hessian(x, project_psd, H);
+    const double mean_diag = H.size() ? H.diagonal().cwiseAbs().mean() : 0.0;
+    return regularized_direction(
+        mean_diag, regularize, opt, ws.m_g, dx, summary, [&](double d) { H.diagonal().array() += d; },
+        [&](std::string& message) {
+            if (!H.allFinite()) {
+                message = "non-finite entry in the Hessian";
+                return FactorStatus::Fatal;
+            }
+            ws.m_ldlt.compute(H);
+            const bool ok = ws.m_ldlt.info() == Eigen::Success && (ws.m_ldlt.vectorD().array() > 0.0).all();
+            return ok ? FactorStatus::Success : FactorStatus::NotPositiveDefinite;
+        },
+        [&](const VectorXd& b, VectorXd& out) { out = ws.m_ldlt.solve(b); });
+}
+
+/// Newton direction: exact Hessian first (Adaptive), then projected, then regularised
+/// with μI until it factorises and gives a descent direction. Every iteration tries
+/// the exact Hessian first: staying on the projected one after a failure (to save a
+/// factorisation) made the full cloth scene stall at the iteration cap (frame 677,
+/// residual 1.6e-5) — projection costs quadratic convergence.
+bool NewtonWorkspace::find_direction(Objective& f, const VectorXd& x, const NewtonOptions& opt, SolveSummary& summary)
+{
+    const bool try_exact = opt.projection != NewtonOptions::Projection::Always;
+    const bool allow_projected = opt.projection != NewtonOptions::Projection::Never;
+    bool have_direction = false;
+    if (try_exact) have_direction = newton_direction(f, x, false, /*regularize=*/!allow_projected, opt, summary);
+    if (!have_direction && allow_projected && summary.message.empty()) {
+        ++summary.projected_iterations;
+        have_direction = newton_direction(f, x, true, /*regularize=*/true, opt, summary);
+    }
+    return have_direction;
+}
+
+/// Backtracking Armijo line search along ws.m_dx from x (energy, slope gᵀdx); on
+/// success ws.m_x_trial holds x + α dx. The step α dx is formed before it is added so
+/// that x + α dx rounds the same way for every objective.
+bool NewtonWorkspace::armijo_search(Objective& f, const VectorXd& x, double energy, double slope,
+                                    const NewtonOptions& opt, SolveSummary& summary, double& alpha, double& trial_energy)
+{
+    NewtonWorkspace& ws = *this;
+    alpha = 1.0;
+    trial_energy = energy;
+    for (int ls = 0; ls < opt.max_line_search; ++ls) {
+        ws.m_step.noalias() = alpha * ws.m_dx;
+        ws.m_x_trial.noalias() = x + ws.m_step;
+        trial_energy = f.value(ws.m_x_trial);
+        ++summary.evaluations;
+        if (std::isfinite(trial_energy) && trial_energy <= energy + opt.armijo_c * alpha * slope) return true;
+        alpha *= opt.backtracking_factor;
+        ++summary.line_search_halvings;
+    }
+    return false;
+}
+
+namespace {
+
+/// Failed for an objective Newton cannot run on; "" if it can.
+std::string unusable(const Objective& f, const VectorXd& x)
+{
+    if (f.hessian_kind() == HessianKind::None)
+        return "Newton needs a Hessian and this objective has none (use minimize_lbfgs)";
+    if (x.size() != f.dimension())
+        return "x has " + std::to_string(x.size()) + " entries, the objective " + std::to_string(f.dimension()) +
+               " unknowns";
+    return "";
+}
+
+} // namespace
+
 SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt, NewtonWorkspace* workspace)
 {
     Timer timer;
     SolveSummary summary;
-    const HessianKind kind = f.hessian_kind();
-    if (kind == HessianKind::None || x.size() != f.dimension()) {
+    summary.message = unusable(f, x);
+    if (!summary.message.empty()) {
         summary.termination = SolveTermination::Failed;
-        summary.message = kind == HessianKind::None
-                              ? "Newton needs a Hessian and this objective has none (use minimize_lbfgs)"
-                              : "x has " + std::to_string(x.size()) + " entries, the objective " +
-                                    std::to_string(f.dimension()) + " unknowns";
         return summary;
     }
     NewtonWorkspace local;
@@ -104,115 +196,45 @@ SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt
     const double gtol = opt.gradient_tolerance * opt.force_scale;
     const double step_tol = opt.step_tolerance * opt.length_scale;
 
-    // dx for the Hessian (exact or projected) at x; see regularized_direction.
-    auto find_direction = [&](bool project_psd, bool regularize) {
-        VectorXd& dx = ws.m_dx;
-        if (kind == HessianKind::Sparse) {
-            SparseMatrixd& A = f.sparse_hessian(x, project_psd);
-            ws.ensure_analyzed(A);
-            double mean_diag = 0.0;
-            for (Index i : ws.m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
-            mean_diag /= double(std::max<size_t>(ws.m_diagonal.size(), 1));
-            return regularized_direction(
-                mean_diag, regularize, opt, ws.m_g, dx, summary,
-                [&](double d) {
-                    for (Index i : ws.m_diagonal) A.valuePtr()[i] += d;
-                },
-                [&](std::string& message) {
-                    const FactorStatus status = ws.m_cholesky->factorize(A);
-                    message = ws.m_cholesky->message();
-                    return status;
-                },
-                [&](const VectorXd& b, VectorXd& out) { out = ws.m_cholesky->solve(b); });
-        }
-        MatrixXd& H = ws.m_dense;
-        f.dense_hessian(x, project_psd, H);
-        const double mean_diag = H.size() ? H.diagonal().cwiseAbs().mean() : 0.0;
-        return regularized_direction(
-            mean_diag, regularize, opt, ws.m_g, dx, summary, [&](double d) { H.diagonal().array() += d; },
-            [&](std::string& message) {
-                if (!H.allFinite()) {
-                    message = "non-finite entry in the Hessian";
-                    return FactorStatus::Fatal;
-                }
-                ws.m_ldlt.compute(H);
-                const bool ok = ws.m_ldlt.info() == Eigen::Success && (ws.m_ldlt.vectorD().array() > 0.0).all();
-                return ok ? FactorStatus::Success : FactorStatus::NotPositiveDefinite;
-            },
-            [&](const VectorXd& b, VectorXd& out) { out = ws.m_ldlt.solve(b); });
-    };
-
     VectorXd& g = ws.m_g;
     g.resize(x.size());
     double energy = f.value(x);
     ++summary.evaluations;
     f.gradient(x, g);
-    bool stopped = false;
-    for (summary.iterations = 0; summary.iterations < opt.max_iterations; ++summary.iterations) {
+    bool stopped = true;
+    auto stop = [&](SolveTermination t) { summary.termination = t; };
+    for (summary.iterations = 0;; ++summary.iterations) {
+        if (summary.iterations >= opt.max_iterations) {
+            stopped = false;
+            break;
+        }
         const double gnorm = g.norm();
         summary.residual = gnorm / opt.force_scale;
         if (!std::isfinite(energy) || !std::isfinite(gnorm)) {
-            summary.termination = SolveTermination::NonFinite;
-            stopped = true;
+            stop(SolveTermination::NonFinite);
             break;
         }
         if (gnorm <= gtol) {
-            summary.termination = SolveTermination::Converged;
-            stopped = true;
+            stop(SolveTermination::Converged);
             break;
         }
-
-        // Newton direction: exact Hessian first (Adaptive), then projected, then
-        // regularised with μI until it factorises and gives a descent direction.
-        // Every iteration tries the exact Hessian first: staying on the projected one
-        // after a failure (to save a factorisation) made the full cloth scene stall at
-        // the iteration cap (frame 677, residual 1.6e-5) — projection costs quadratic
-        // convergence.
-        const bool try_exact = opt.projection != NewtonOptions::Projection::Always;
-        const bool allow_projected = opt.projection != NewtonOptions::Projection::Never;
-        bool have_direction = false;
-        if (try_exact) have_direction = find_direction(false, /*regularize=*/!allow_projected);
-        if (!have_direction && allow_projected && summary.message.empty()) {
-            ++summary.projected_iterations;
-            have_direction = find_direction(true, /*regularize=*/true);
-        }
-        if (!have_direction) {
-            summary.termination = SolveTermination::FactorizationFailed;
+        if (!ws.find_direction(f, x, opt, summary)) {
+            stop(SolveTermination::FactorizationFailed);
             if (summary.message.empty()) summary.message = "no descent direction after regularisation";
-            stopped = true;
             break;
         }
-
-        // Backtracking Armijo line search. The step α dx is formed before it is added
-        // so that x + α dx rounds the same way for every objective.
-        const VectorXd& dx = ws.m_dx;
-        const double slope = g.dot(dx);
-        double alpha = 1.0;
-        double trial_energy = energy;
-        bool accepted = false;
-        for (int ls = 0; ls < opt.max_line_search; ++ls) {
-            ws.m_step.noalias() = alpha * dx;
-            ws.m_x_trial.noalias() = x + ws.m_step;
-            trial_energy = f.value(ws.m_x_trial);
-            ++summary.evaluations;
-            if (std::isfinite(trial_energy) && trial_energy <= energy + opt.armijo_c * alpha * slope) {
-                accepted = true;
-                break;
-            }
-            alpha *= opt.backtracking_factor;
-            ++summary.line_search_halvings;
-        }
-        const double full_step = f.step_length(dx);
+        double alpha = 1.0, trial_energy = energy;
+        const bool accepted = ws.armijo_search(f, x, energy, g.dot(ws.m_dx), opt, summary, alpha, trial_energy);
+        const double full_step = f.step_length(ws.m_dx);
         if (!accepted) {
             // At the precision floor the energy cannot decrease measurably: a tiny
             // full step means we are converged to round-off.
             if (full_step <= opt.small_step_factor * step_tol) {
-                summary.termination = SolveTermination::SmallStep;
+                stop(SolveTermination::SmallStep);
             } else {
-                summary.termination = SolveTermination::LineSearchFailed;
+                stop(SolveTermination::LineSearchFailed);
                 summary.message = "no sufficient decrease after " + std::to_string(opt.max_line_search) + " halvings";
             }
-            stopped = true;
             break;
         }
         x.swap(ws.m_x_trial);
@@ -220,9 +242,8 @@ SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt
         f.gradient(x, g);
         if (alpha * full_step <= step_tol) {
             summary.residual = g.norm() / opt.force_scale;
-            summary.termination = SolveTermination::SmallStep;
+            stop(SolveTermination::SmallStep);
             ++summary.iterations;
-            stopped = true;
             break;
         }
     }

@@ -78,6 +78,13 @@ private:
     friend SolveSummary minimize_newton(Objective&, VectorXd&, const NewtonOptions&, NewtonWorkspace*);
     /// Re-analyse `lower` unless its pattern is the one analysed last.
     void ensure_analyzed(const SparseMatrixd& lower);
+    // The steps of one Newton iteration (newton.cpp): m_dx for the exact or projected
+    // Hessian, the Adaptive policy over both, and the Armijo search along m_dx.
+    bool newton_direction(Objective& f, const VectorXd& x, bool project_psd, bool regularize,
+                          const NewtonOptions& opt, SolveSummary& summary);
+    bool find_direction(Objective& f, const VectorXd& x, const NewtonOptions& opt, SolveSummary& summary);
+    bool armijo_search(Objective& f, const VectorXd& x, double energy, double slope, const NewtonOptions& opt,
+                       SolveSummary& summary, double& alpha, double& trial_energy);
 
     std::unique_ptr<SparseCholesky> m_cholesky;  // created on first sparse use
     std::vector<Index> m_outer, m_inner;         // the analysed pattern
