@@ -47,13 +47,13 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
     t1.title = "Table 1: latent integration vs full-space simulation";
     t1.caption = "Per-frame times (median). 'ours' is the first self-supervised integrator of the suite, float, "
                  "batch 1, one thread; 'simulation' is the median full-space Newton step of the dataset. "
-                 "Paper columns: Li et al. 2025, Table 1 (AMD Threadripper workstation).";
+                 "Paper columns: " + std::string(kPaperCitation) + ", Table 1 (" + kPaperTimingHardware + ").";
     t1.columns = {"example", "DOF", "latent", "simulation (ms)", "integration (ms)", "decoder (ms)", "total (ms)",
                   "paper DOF", "paper simulation (ms)", "paper integration (ms)", "paper decoder (ms)", "paper total (ms)"};
     t2.title = "Table 2: our step vs one vertex's decoder JVP";
     t2.caption = "Computing JVP = the Jacobian rows of one vertex's three coordinates w.r.t. the latent through "
                  "the float decoder (the least an optimisation-based latent integrator such as Fulton et al. 2019 "
-                 "needs per cubature point and iteration). Paper columns: Li et al. 2025, Table 2.";
+                 "needs per cubature point and iteration). Paper columns: " + std::string(kPaperCitation) + ", Table 2.";
     t2.columns = {"example", "DOF", "latent", "decoder layers", "integrator layers", "JVP (ms)", "ours (ms)",
                   "paper decoder layers", "paper integrator layers", "paper JVP (ms)", "paper ours (ms)"};
     for (const SceneResult& r : scenes) {

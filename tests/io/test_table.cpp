@@ -15,6 +15,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/process.hpp"
 #include "core/parallel.hpp"
 #include "eval/metrics.hpp"
 #include "paper/paper_numbers.hpp"
@@ -58,10 +59,9 @@ std::vector<std::string> directory_entries(const std::string& dir)
     return names;
 }
 
-int run_shell(const std::string& cmd)
+int run(const std::vector<std::string>& argv, const std::string& out = "", const std::string& err = "")
 {
-    const int status = std::system(cmd.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return lb::run_process(argv, {out.empty() ? "/dev/null" : out, err.empty() ? "/dev/null" : err});
 }
 
 const char* const kPython = "/usr/bin/python3";
@@ -69,7 +69,7 @@ const char* const kPython = "/usr/bin/python3";
 bool python_has_plotting()
 {
     return fs::exists(kPython) &&
-           run_shell(std::string(kPython) + " -c 'import matplotlib, h5py, numpy' > /dev/null 2>&1") == 0;
+           run({kPython, "-c", "import matplotlib, h5py, numpy"}) == 0;
 }
 
 } // namespace
@@ -310,8 +310,8 @@ TEST(PlotScripts, PlotRolloutsWritesPngs)
     write_fake_rollouts(rollouts);
     const std::string script = std::string(LB_SOURCE_DIR) + "/scripts/plot_rollouts.py";
     const std::string out = dir + "/figures";
-    const int code = run_shell(std::string(kPython) + " " + script + " " + rollouts + " -o " + out +
-                               " --title test --train-frames 20 > " + dir + "/stdout.txt 2> " + dir + "/stderr.txt");
+    const int code = run({kPython, script, rollouts, "-o", out, "--title", "test", "--train-frames", "20"},
+                         dir + "/stdout.txt", dir + "/stderr.txt");
     ASSERT_EQ(code, 0) << read_text(dir + "/stderr.txt");
     const std::string printed = read_text(dir + "/stdout.txt");
     for (const char* sequence : {"corners_line", "second"}) {
@@ -333,8 +333,7 @@ TEST(PlotScripts, PlotRolloutsRejectsMissingAndCorruptFiles)
     const std::string script = std::string(LB_SOURCE_DIR) + "/scripts/plot_rollouts.py";
     lb::testing::write_file(dir + "/corrupt.h5", "not an HDF5 file");
     for (const std::string& input : {dir + "/missing.h5", dir + "/corrupt.h5"}) {
-        const int code = run_shell(std::string(kPython) + " " + script + " " + input + " -o " + dir +
-                                   "/figures > /dev/null 2> " + dir + "/stderr.txt");
+        const int code = run({kPython, script, input, "-o", dir + "/figures"}, "", dir + "/stderr.txt");
         EXPECT_EQ(code, 1) << input;
         const std::string err = read_text(dir + "/stderr.txt");
         EXPECT_NE(err.find("plot_rollouts.py: error:"), std::string::npos) << err;

@@ -10,6 +10,7 @@
 #include <functional>
 
 #include "core/error.hpp"
+#include "core/process.hpp"
 #include "core/log.hpp"
 #include "io/hdf5.hpp"
 #include "latent/autoencoder.hpp"
@@ -525,7 +526,7 @@ TEST(AutoencoderTraining, DefaultLatentSizesPerScene)
 
 TEST(Autoencoder, NumpyReferenceDecoderMatches)
 {
-    if (std::system("/usr/bin/python3 -c 'import numpy, h5py' > /dev/null 2>&1") != 0)
+    if (run_process({"/usr/bin/python3", "-c", "import numpy, h5py"}, {"/dev/null", "/dev/null"}) != 0)
         GTEST_SKIP() << "/usr/bin/python3 lacks numpy or h5py";
     const Dataset data = latent_test::small_cloth_prefix(120);
     AutoencoderOptions o = tiny_options();
@@ -541,9 +542,10 @@ TEST(Autoencoder, NumpyReferenceDecoderMatches)
         f.write("inputs", Z);  // latent × 7: one sample per column
     }
     fs::remove(out);
-    const std::string cmd = "/usr/bin/python3 " LB_SOURCE_DIR "/scripts/nn_reference.py " + model +
-                            " --prefix decoder. --input " + in + " --dataset inputs --columns --output " + out;
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const std::vector<std::string> argv{"/usr/bin/python3", std::string(LB_SOURCE_DIR) + "/scripts/nn_reference.py",
+                                        model, "--prefix", "decoder.", "--input", in, "--dataset", "inputs",
+                                        "--columns", "--output", out};
+    ASSERT_EQ(run_process(argv), 0) << "scripts/nn_reference.py " << model;
     const MatrixXd F_numpy = h5::File::open(out).read_matrix("output");
     const MatrixXd F_cpp = ae.decode_features(Z);
     ASSERT_EQ(F_numpy.rows(), F_cpp.rows());

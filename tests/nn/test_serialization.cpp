@@ -6,6 +6,8 @@
 #include <fstream>
 
 #include "core/error.hpp"
+#include "core/process.hpp"
+#include "lb_paths.hpp"
 #include "io/hdf5.hpp"
 #include "nn/architecture.hpp"
 #include "nn/batch_norm.hpp"
@@ -136,7 +138,7 @@ TEST(Serialization, ErrorsNameTheFileAndDataset)
 
 TEST(Serialization, NumpyReferenceScriptAgrees)
 {
-    if (std::system("/usr/bin/python3 -c 'import numpy, h5py' > /dev/null 2>&1") != 0)
+    if (run_process({"/usr/bin/python3", "-c", "import numpy, h5py"}, {"/dev/null", "/dev/null"}) != 0)
         GTEST_SKIP() << "/usr/bin/python3 lacks numpy or h5py";
     Rng rng(94);
     Sequential enc = encoder(rng);
@@ -167,9 +169,10 @@ TEST(Serialization, NumpyReferenceScriptAgrees)
             h5::File f = h5::File::open(inputs, true);
             f.write("inputs", in);
         }
-        const std::string cmd = "/usr/bin/python3 scripts/nn_reference.py " + model + " --prefix " + prefix +
-                                " --input " + inputs + " --dataset inputs --columns --output " + output;
-        ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+        const std::vector<std::string> argv{"/usr/bin/python3", std::string(LB_SOURCE_DIR) + "/scripts/nn_reference.py",
+                                            model, "--prefix", prefix, "--input", inputs, "--dataset", "inputs",
+                                            "--columns", "--output", output};
+        ASSERT_EQ(run_process(argv), 0) << "scripts/nn_reference.py " << model << " --prefix " << prefix;
         const MatrixXd py = h5::File::open(output).read_matrix("output");
         const MatrixXd cpp = prefix == "encoder." ? enc.forward(st.apply(in), false) : dec.forward(in, false);
         ASSERT_EQ(py.rows(), cpp.rows());

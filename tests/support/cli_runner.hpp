@@ -1,12 +1,15 @@
 #pragma once
-// Run the latentbench CLI from a test and capture its exit code and output.
-#include <sys/wait.h>
+// Run the latentbench CLI (or another program) from a test and capture its exit
+// code and output, through an argument vector (core/process.hpp), never a shell.
+#include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
+
+#include "core/process.hpp"
 
 namespace lb::testing {
 
@@ -15,19 +18,28 @@ struct CliResult {
     std::string output;  ///< stdout and stderr together
 };
 
-inline CliResult run_cli(const std::string& args)
+/// Run argv (argv[0] an absolute path); stdout and stderr together in the output.
+inline CliResult run_program(const std::vector<std::string>& argv)
 {
     const std::string log = std::string(LB_TEST_TMP_DIR) + "/cli_output_" + std::to_string(::getpid()) + ".txt";
-    const std::string cmd = std::string(LB_CLI_PATH) + " " + args + " > " + log + " 2>&1";
-    const int status = std::system(cmd.c_str());
+    std::ofstream(log).close();  // both streams append to it, so they interleave in order
     CliResult result;
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    result.exit_code = lb::run_process(argv, {log, log, /*append_stdout=*/true});
     std::ifstream in(log);
     std::ostringstream ss;
     ss << in.rdbuf();
     result.output = ss.str();
     std::filesystem::remove(log);
     return result;
+}
+
+/// The CLI with whitespace-separated arguments (test paths contain no spaces).
+inline CliResult run_cli(const std::string& args)
+{
+    std::vector<std::string> argv{LB_CLI_PATH};
+    std::istringstream words(args);
+    for (std::string w; words >> w;) argv.push_back(w);
+    return run_program(argv);
 }
 
 /// A fresh, empty directory under the test temp dir.
