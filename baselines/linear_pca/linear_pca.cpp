@@ -109,7 +109,7 @@ LinearPcaIntegrator::LinearPcaIntegrator(std::string name, const PhysicsModel& m
       m_subspace(std::move(subspace)),
       m_options(options),
       m_encoding(model.spec()),
-      m_potential(model, model.kind() == MeshKind::Rods ? 0.0 : options.penalty_weight)
+      m_potential(model, applied_penalty_weight(model, options.penalty_weight))
 {
     const PcaBasis& pca = m_subspace.pca;
     if (pca.basis.rows() != m_encoding.num_features())

@@ -1,7 +1,5 @@
 #include "integrators/trainer.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <filesystem>
 #include <numeric>
@@ -54,7 +52,7 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     if (self_supervised) {
         s << ";balancing=" << (o.data_balancing ? "on" : "off");
         if (o.data_balancing) s << ";balancing_floor=" << nn::exact_text(o.balancing_floor);
-        s << ";penalty_weight=" << nn::exact_text(m_penalty_weight);
+        s << ";penalty_weight=" << nn::exact_text(m_potential.penalty_weight());
     }
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
     return s.str();
@@ -100,12 +98,11 @@ TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
 
 IntegratorTrainer::IntegratorTrainer(const PhysicsModel& model, Autoencoder& autoencoder,
                                      IntegratorTrainOptions options)
-    : m_model(model), m_autoencoder(autoencoder), m_options(std::move(options))
+    : m_model(model),
+      m_autoencoder(autoencoder),
+      m_options(std::move(options)),
+      m_potential(model, autoencoder, m_options.penalty_weight)
 {
-    m_penalty_weight = model.kind() == MeshKind::Rods ? 0.0 : m_options.penalty_weight;
-    const int threads = std::max(1, omp_get_max_threads());
-    m_potentials.reserve(size_t(threads));
-    for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
 }
 
 IntegratorBatch IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::vector<Index>& indices,
@@ -163,35 +160,25 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
         return diff.squaredNorm() / double(B);
     }
 
-    // Self-supervised: the incremental potential of the decoded prediction.
+    // Self-supervised: the incremental potential of the decoded prediction, each sample
+    // weighted by data balancing, averaged over the batch.
     const MatrixXd X1 = decoded_inputs(batch, 1);
     const MatrixXd X2 = decoded_inputs(batch, 2);
-    const MatrixXd Xt = m_autoencoder.decode(Zt, batch.targets);
-    const Index n_dofs = Xt.rows();
-    const double dt = m_model.dt();
-    VectorXd energy(B), weight(B);
-    MatrixXd grad(with_gradient ? n_dofs : 0, with_gradient ? B : 0);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (Index i = 0; i < B; ++i) {
-        IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
-        const VectorXd x1 = X1.col(i), x2 = X2.col(i), xt = Xt.col(i);
-        pot.set_previous(x1, x2);
-        pot.set_bc_targets(Eigen::Map<const MatrixX3d>(batch.targets.col(i).data(), batch.targets.rows() / 3, 3));
-        energy[i] = pot.value(xt);
-        if (with_gradient) grad.col(i) = pot.gradient(xt);
-        double w = 1.0;
-        if (m_options.data_balancing) {
+    LatentEnergyOptions options;
+    options.gradient = with_gradient;
+    options.weights = VectorXd::Ones(B);
+    if (m_options.data_balancing) {
+        const double dt = m_model.dt();
+        for (Index i = 0; i < B; ++i) {
+            const VectorXd x1 = X1.col(i), x2 = X2.col(i);
             const Vector3d v = (as_rows(x1) - as_rows(x2)).colwise().mean().transpose() / dt;
-            w = 1.0 / std::max(v.norm(), m_velocity_floor);
+            options.weights[i] = 1.0 / std::max(v.norm(), m_velocity_floor);
         }
-        weight[i] = w;
     }
-    if (!energy.allFinite()) throw NumericalError("non-finite incremental potential in the training batch");
-    if (with_gradient) {
-        const MatrixXd dX = grad * (weight / double(B)).asDiagonal();
-        model.backward(m_autoencoder.decoder_vjp(Zt, dX));
-    }
-    return weight.dot(energy) / double(B);
+    options.normalization = double(B);
+    const LatentEnergies e = m_potential.evaluate(Zt, batch.targets, X1, X2, options);
+    if (with_gradient) model.backward(e.grad_z);
+    return e.objective;
 }
 
 void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)

@@ -7,7 +7,8 @@
 //                    x_{t−1}, x_{t−2} decoded from the input latents and the Dirichlet penalty
 //                    w_bc Σ_B |x_i − x*_i|² for cloth and solids (rods: roots are hard).
 //                    ∂L/∂z_t = J_Dᵀ ∇E: one vector-Jacobian product through the frozen
-//                    decoder per sample; energies are evaluated in parallel over the batch.
+//                    decoder per sample; energies are evaluated in parallel over the batch
+//                    (latent/latent_potential.hpp).
 //   supervised_l2    L_i = ||z_t − z_t^gt||² (the baseline; same network).
 // Data balancing: L_i / max(|v_{t−1}|, v_floor), v_{t−1} = (1/N) Σ_j (x_{t−1}^j − x_{t−2}^j)/h
 //   of the decoded inputs (paper eq. 6); v_floor = balancing_floor × the mean |v| of the
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include "integrators/latent_mlp_integrator.hpp"
+#include "latent/latent_potential.hpp"
 #include "sim/physics_model.hpp"
 
 namespace lb {
@@ -132,8 +134,7 @@ private:
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
     IntegratorTrainOptions m_options;
-    double m_penalty_weight = 0.0;  ///< w_bc applied (0 for rods: hard roots)
-    std::vector<IncrementalPotential> m_potentials;  ///< one per thread
+    LatentPotential m_potential;  ///< E(D(z)) with the applied w_bc (0 for rods: hard roots)
     double m_velocity_floor = 1e-6;
     MatrixXd m_decoded_prev, m_decoded_prev2;  ///< 3N × S cache (empty: decode every batch)
 };

@@ -91,6 +91,11 @@ void PhysicsModel::apply_bc(const MatrixX3d& targets, VectorXd& x) const
     }
 }
 
+double applied_penalty_weight(const PhysicsModel& model, double penalty_weight)
+{
+    return model.kind() == MeshKind::Rods ? 0.0 : penalty_weight;
+}
+
 IncrementalPotential::IncrementalPotential(const PhysicsModel& model, double penalty_weight)
 {
     m_inertia = std::make_shared<InertiaEnergy>(model.masses(), model.dt());

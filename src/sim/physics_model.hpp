@@ -67,6 +67,15 @@ private:
     double m_force_scale = 1.0;
 };
 
+/// The boundary policy of reduced (latent and subspace) methods, stated once: their
+/// decoders cannot pin vertices exactly in general, so cloth and solids add the Dirichlet
+/// penalty w_bc Σ_B |x_i − x*_i|²; rods decode their roots exactly (BC-relative encoding,
+/// hard roots), so no penalty (0). The full-space solver removes the Dirichlet DOF and
+/// never uses a penalty.
+/// @param penalty_weight  the configured w_bc (> 0)
+/// @return the w_bc to build the IncrementalPotential with: 0 for rods, else penalty_weight
+double applied_penalty_weight(const PhysicsModel& model, double penalty_weight);
+
 /// The objective of one implicit-Euler step. Owns its inertia and penalty terms
 /// (cheap), shares the model's elastic terms, so one instance per thread can be
 /// evaluated concurrently (the learning losses do this over a batch).

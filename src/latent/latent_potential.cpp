@@ -1,0 +1,90 @@
+#include "latent/latent_potential.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+
+#include "core/error.hpp"
+
+namespace lb {
+
+LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoencoder, double penalty_weight)
+    : m_model(model), m_autoencoder(autoencoder), m_penalty_weight(applied_penalty_weight(model, penalty_weight))
+{
+    const int threads = std::max(1, omp_get_max_threads());
+    m_potentials.reserve(size_t(threads));
+    for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
+}
+
+double LatentPotential::value(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
+                              const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2)
+{
+    return evaluate_columns(z, bc_targets, x_prev, x_prev2, {}, false).energies[0];
+}
+
+double LatentPotential::value_and_gradient(const Eigen::Ref<const VectorXd>& z,
+                                           const Eigen::Ref<const VectorXd>& bc_targets,
+                                           const Eigen::Ref<const VectorXd>& x_prev,
+                                           const Eigen::Ref<const VectorXd>& x_prev2, VectorXd& grad_z)
+{
+    LatentEnergyOptions options;
+    options.gradient = true;
+    LatentEnergies r = evaluate_columns(z, bc_targets, x_prev, x_prev2, options, false);
+    grad_z = r.grad_z.col(0);
+    return r.energies[0];
+}
+
+LatentEnergies LatentPotential::evaluate(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                         const Eigen::Ref<const MatrixXd>& X_prev,
+                                         const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options)
+{
+    return evaluate_columns(Z, bc_targets, X_prev, X_prev2, options, true);
+}
+
+LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
+                                                 const Eigen::Ref<const MatrixXd>& X_prev,
+                                                 const Eigen::Ref<const MatrixXd>& X_prev2,
+                                                 const LatentEnergyOptions& options, bool check_finite)
+{
+    const Index B = Z.cols();
+    const Index n_dofs = m_model.num_dofs();
+    const Index n_targets = 3 * Index(m_model.bc_indices().size());
+    auto shape = [](const auto& m) { return std::to_string(m.rows()) + "×" + std::to_string(m.cols()); };
+    if (Z.rows() != m_autoencoder.latent_dim() || bc_targets.rows() != n_targets || bc_targets.cols() != B ||
+        X_prev.rows() != n_dofs || X_prev.cols() != B || X_prev2.rows() != n_dofs || X_prev2.cols() != B ||
+        (options.weights.size() != 0 && options.weights.size() != B))
+        throw Error("LatentPotential: shapes z " + shape(Z) + ", bc_targets " + shape(bc_targets) + ", x_prev " +
+                    shape(X_prev) + ", x_prev2 " + shape(X_prev2) + ", weights " +
+                    std::to_string(options.weights.size()) + "; expected " +
+                    std::to_string(m_autoencoder.latent_dim()) + ", " + std::to_string(n_targets) + ", " +
+                    std::to_string(n_dofs) + " and " + std::to_string(n_dofs) + " rows, as many columns, 0 or " +
+                    std::to_string(B) + " weights");
+    LatentEnergies out;
+    MatrixXd X = m_autoencoder.decode(Z, bc_targets);
+    out.energies.resize(B);
+    MatrixXd grad_x(options.gradient ? n_dofs : 0, options.gradient ? B : 0);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (Index i = 0; i < B; ++i) {
+        IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
+        const VectorXd x1 = X_prev.col(i), x2 = X_prev2.col(i), xt = X.col(i);
+        pot.set_previous(x1, x2);
+        pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
+        out.energies[i] = pot.value(xt);
+        if (options.gradient) grad_x.col(i) = pot.gradient(xt);
+    }
+    if (check_finite && !out.energies.allFinite())
+        throw NumericalError("non-finite incremental potential in the training batch");
+    // The objective's weights w_i / n: divided (not multiplied by 1/n) so the numbers are
+    // those of the integrator loss written out before this class existed.
+    VectorXd weights = options.weights;
+    if (weights.size() == 0) weights.setOnes(B);
+    out.objective = weights.dot(out.energies) / options.normalization;
+    if (options.gradient) {
+        const MatrixXd weighted = grad_x * (weights / options.normalization).asDiagonal();
+        out.grad_z = m_autoencoder.decoder_vjp(Z, weighted);
+    }
+    if (options.decoded) out.X = std::move(X);
+    return out;
+}
+
+} // namespace lb

@@ -1,0 +1,94 @@
+#pragma once
+// E(D(z)): the implicit-Euler incremental potential of the positions an autoencoder
+// decodes from a latent, and its gradient with respect to the latent through the
+// frozen decoder. The physics shared by the latent methods: Li et al. 2025's
+// self-supervised integrator loss (integrators/trainer.hpp), Fulton et al. 2019's
+// latent optimisation, Tan et al.'s physics-loss MLP.
+//
+//   x    = D(z; x*_B)                          3N, decoded BC-relative (autoencoder.hpp)
+//   E(x) = 1/(2h²)(x − x̃)ᵀM(x − x̃) + E_elastic(x) − Σ m_i g·x_i [+ w_bc Σ_B |x_i − x*_i|²],
+//   x̃    = 2 x_{t−1} − x_{t−2}                 (sim/physics_model.hpp)
+//   ∇_z E(D(z)) = J_D(z)ᵀ ∇_x E(x)             one vector-Jacobian product through the decoder
+//
+// w_bc is applied_penalty_weight(model, penalty_weight) (sim/physics_model.hpp): the
+// penalty for cloth and solids, none for rods (their roots are decoded exactly).
+// The decoder is evaluated in eval mode and never modified.
+#include <vector>
+
+#include "latent/autoencoder.hpp"
+#include "sim/physics_model.hpp"
+
+namespace lb {
+
+/// What evaluate() computes besides the per-sample energies.
+struct LatentEnergyOptions {
+    bool gradient = false;  ///< compute LatentEnergies::grad_z
+    bool decoded = false;   ///< return the decoded positions LatentEnergies::X
+    /// Per-sample weights w_i (B); empty: every w_i = 1.
+    VectorXd weights;
+    /// n of the objective Σ_i w_i E_i / n (e.g. the batch size B for a weighted mean).
+    double normalization = 1.0;
+};
+
+/// The result of LatentPotential::evaluate for B samples.
+struct LatentEnergies {
+    VectorXd energies;       ///< E_i = E(D(z_i); x_{t−1,i}, x_{t−2,i}, x*_{B,i}), unweighted (B)
+    double objective = 0.0;  ///< Σ_i w_i E_i / n
+    /// ∂objective/∂z_i = (w_i / n) J_D(z_i)ᵀ ∇_x E_i(D(z_i)), latent × B (if options.gradient).
+    MatrixXd grad_z;
+    MatrixXd X;  ///< D(z_i), 3N × B (if options.decoded)
+};
+
+class LatentPotential {
+public:
+    /// @param model           the physics; must outlive this object
+    /// @param autoencoder     whose decoder D is used (frozen); must outlive this object
+    /// @param penalty_weight  the configured w_bc (> 0); the applied one follows the
+    ///                        boundary policy (applied_penalty_weight: 0 for rods)
+    LatentPotential(const PhysicsModel& model, Autoencoder& autoencoder, double penalty_weight);
+
+    /// The w_bc applied (0 for rods: hard roots).
+    double penalty_weight() const { return m_penalty_weight; }
+    const PhysicsModel& model() const { return m_model; }
+    Autoencoder& autoencoder() { return m_autoencoder; }
+
+    // One sample. A non-finite energy is returned as it is (optimisers treat it as a
+    // failed trial point).
+    /// E(D(z)).
+    /// @param z           latent
+    /// @param bc_targets  3B Dirichlet targets x*_B of the step (decoding and penalty)
+    /// @param x_prev      3N positions x_{t−1}
+    /// @param x_prev2     3N positions x_{t−2}
+    double value(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
+                 const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2);
+    /// E(D(z)) and grad_z = J_D(z)ᵀ ∇_x E(D(z)) (latent); arguments as value().
+    double value_and_gradient(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
+                              const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2,
+                              VectorXd& grad_z);
+
+    /// B samples (columns): one batched decode, the energies (and their x-gradients) in
+    /// parallel over the samples (OpenMP, one IncrementalPotential per thread), then one
+    /// batched decoder VJP of the weighted x-gradients (w_i / n) ∇_x E_i.
+    /// Throws NumericalError if an energy is not finite.
+    /// @param Z           latent × B
+    /// @param bc_targets  3B_dirichlet × B Dirichlet targets of the steps
+    /// @param X_prev      3N × B positions x_{t−1}
+    /// @param X_prev2     3N × B positions x_{t−2}
+    LatentEnergies evaluate(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                            const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                            const LatentEnergyOptions& options = {});
+
+private:
+    /// evaluate(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
+    LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
+                                    const Eigen::Ref<const MatrixXd>& X_prev,
+                                    const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options,
+                                    bool check_finite);
+
+    const PhysicsModel& m_model;
+    Autoencoder& m_autoencoder;
+    double m_penalty_weight = 0.0;
+    std::vector<IncrementalPotential> m_potentials;  ///< one per thread
+};
+
+} // namespace lb

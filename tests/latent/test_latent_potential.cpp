@@ -1,0 +1,207 @@
+// LatentPotential: E(D(z)) and its latent gradient J_Dᵀ∇E against central finite
+// differences (cloth and solid with the Dirichlet penalty, rods with hard roots); the
+// batched evaluation against the single-sample one and against a direct computation
+// (decode, IncrementalPotential, decoder VJP); weights, normalisation, the boundary
+// policy, and the errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <ostream>
+
+#include "core/error.hpp"
+#include "latent/latent_potential.hpp"
+#include "latent/latent_test_support.hpp"
+#include "support/finite_difference.hpp"
+
+namespace lb {
+namespace {
+
+using latent_test::random_matrix;
+using latent_test::targets_of;
+
+constexpr double kPenaltyWeight = 1e5;  ///< the configured w_bc (the integrator default)
+
+/// Relative closeness |a − b| ≤ tol · max(|a|, |b|, 1) of two matrices, entrywise.
+::testing::AssertionResult close(const MatrixXd& a, const MatrixXd& b, double tol, const std::string& what)
+{
+    lb::testing::FdOptions o;
+    o.tol = tol;
+    return lb::testing::matrices_close(a, b, o, what);
+}
+
+/// A physics model, a tiny PCA-initialised autoencoder over random frames near rest,
+/// and B steps: latents, Dirichlet targets, x_{t−1} and x_{t−2} near rest.
+struct Problem {
+    PhysicsSpec spec;
+    std::unique_ptr<PhysicsModel> model;
+    std::unique_ptr<Autoencoder> ae;
+    MatrixXd Z, T, X_prev, X_prev2;
+
+    Problem(const PhysicsSpec& physics, Index B, std::uint64_t seed) : spec(physics)
+    {
+        model = std::make_unique<PhysicsModel>(spec);
+        AutoencoderOptions o;
+        o.latent_dim = 3;
+        o.hidden = {8, 8};
+        o.pca_dim = 6;
+        o.progress = false;
+        ae = std::make_unique<Autoencoder>(spec, o, seed);
+        Rng rng(seed + 100);
+        const VectorXd rest = flatten(spec.mesh.rest_positions);
+        const MatrixXd frames = random_matrix(rest.size(), 20, rng, -0.01, 0.01).colwise() + rest;
+        ae->initialize_pca(ae->encoding().to_features(frames));
+        Z = random_matrix(3, B, rng, -0.5, 0.5);
+        X_prev = random_matrix(rest.size(), B, rng, -0.01, 0.01).colwise() + rest;
+        X_prev2 = random_matrix(rest.size(), B, rng, -0.01, 0.01).colwise() + rest;
+        // Targets near (not on) the previous positions' Dirichlet vertices, so the penalty acts.
+        T = targets_of(X_prev, spec.bc_indices) + random_matrix(3 * Index(spec.bc_indices.size()), B, rng, -0.01, 0.01);
+    }
+};
+
+struct Case {
+    const char* name;
+    PhysicsSpec (*physics)();
+    bool penalty;  ///< the boundary policy applies w_bc (cloth, solids), not rods
+};
+
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
+class LatentPotentialPhysics : public ::testing::TestWithParam<Case> { };
+
+TEST_P(LatentPotentialPhysics, BoundaryPolicyGivesThePenaltyWeight)
+{
+    Problem p(GetParam().physics(), 1, 1);
+    const double expected = GetParam().penalty ? kPenaltyWeight : 0.0;
+    EXPECT_EQ(applied_penalty_weight(*p.model, kPenaltyWeight), expected);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    EXPECT_EQ(potential.penalty_weight(), expected);
+}
+
+// grad_z = J_D(z)ᵀ ∇_x E(D(z)) against central differences of E(D(z)).
+TEST_P(LatentPotentialPhysics, GradientMatchesFiniteDifferences)
+{
+    Problem p(GetParam().physics(), 3, 2);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    for (Index s = 0; s < p.Z.cols(); ++s) {
+        const VectorXd t = p.T.col(s), x1 = p.X_prev.col(s), x2 = p.X_prev2.col(s);
+        VectorXd grad;
+        potential.value_and_gradient(p.Z.col(s), t, x1, x2, grad);
+        ASSERT_EQ(grad.size(), 3);
+        EXPECT_GT(grad.cwiseAbs().maxCoeff(), 0.0);
+        lb::testing::FdOptions fd;
+        fd.step = 1e-6;
+        fd.tol = 1e-5;
+        fd.scale = 1e-6 * grad.cwiseAbs().maxCoeff();
+        EXPECT_TRUE(lb::testing::check_gradient([&](const VectorXd& z) { return potential.value(z, t, x1, x2); },
+                                                [&](const VectorXd&) { return grad; }, p.Z.col(s), fd,
+                                                std::string(GetParam().name) + " sample " + std::to_string(s)));
+    }
+}
+
+// The batch: its energies are those of decode + IncrementalPotential, its gradient the
+// decoder VJP of the weighted x-gradients, and both agree with the single-sample calls.
+TEST_P(LatentPotentialPhysics, BatchAgreesWithSingleSamplesAndTheDirectComputation)
+{
+    const Index B = 4;
+    Problem p(GetParam().physics(), B, 3);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    LatentEnergyOptions options;
+    options.gradient = true;
+    options.decoded = true;
+    options.weights = (VectorXd(B) << 0.5, 2.0, 1.0, 3.0).finished();
+    options.normalization = 7.0;
+    const LatentEnergies e = potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    ASSERT_EQ(e.energies.size(), B);
+    ASSERT_EQ(e.grad_z.rows(), 3);
+    ASSERT_EQ(e.grad_z.cols(), B);
+
+    // Direct: decode, one IncrementalPotential with the policy's weight, one VJP.
+    const MatrixXd X = p.ae->decode(p.Z, p.T);
+    EXPECT_EQ(e.X, X);
+    IncrementalPotential direct(*p.model, GetParam().penalty ? kPenaltyWeight : 0.0);
+    EXPECT_EQ(direct.has_penalty(), GetParam().penalty);
+    VectorXd energies(B);
+    MatrixXd grad_x(X.rows(), B);
+    for (Index i = 0; i < B; ++i) {
+        direct.set_previous(p.X_prev.col(i), p.X_prev2.col(i));
+        direct.set_bc_targets(as_rows(VectorXd(p.T.col(i))));
+        energies[i] = direct.value(X.col(i));
+        grad_x.col(i) = direct.gradient(X.col(i)) * options.weights[i] / options.normalization;
+    }
+    EXPECT_TRUE(close(e.energies, energies, 1e-12, "energies vs direct"));
+    EXPECT_NEAR(e.objective, options.weights.dot(energies) / options.normalization,
+                1e-12 * std::abs(e.objective));
+    EXPECT_TRUE(close(e.grad_z, p.ae->decoder_vjp(p.Z, grad_x), 1e-12, "grad_z vs direct"));
+
+    // Single samples: the same energies; the batch gradient is (w_i / n) × theirs.
+    for (Index i = 0; i < B; ++i) {
+        VectorXd grad;
+        const double value = potential.value_and_gradient(p.Z.col(i), p.T.col(i), p.X_prev.col(i),
+                                                          p.X_prev2.col(i), grad);
+        EXPECT_NEAR(value, e.energies[i], 1e-10 * std::abs(value));
+        EXPECT_EQ(potential.value(p.Z.col(i), p.T.col(i), p.X_prev.col(i), p.X_prev2.col(i)), value);
+        EXPECT_TRUE(close(e.grad_z.col(i), grad * options.weights[i] / options.normalization, 1e-10,
+                          "batch vs single gradient, sample " + std::to_string(i)));
+    }
+}
+
+// Without weights every w_i = 1; without the flags no gradient and no positions.
+TEST_P(LatentPotentialPhysics, DefaultsAreUnitWeightsAndNoGradient)
+{
+    const Index B = 3;
+    Problem p(GetParam().physics(), B, 4);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    LatentEnergyOptions options;
+    options.normalization = double(B);
+    const LatentEnergies e = potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    EXPECT_EQ(e.grad_z.size(), 0);
+    EXPECT_EQ(e.X.size(), 0);
+    EXPECT_NEAR(e.objective, e.energies.mean(), 1e-12 * std::abs(e.objective));
+
+    options.gradient = true;
+    const LatentEnergies unit = potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    options.weights = VectorXd::Ones(B);
+    const LatentEnergies ones = potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    EXPECT_EQ(unit.energies, e.energies);
+    EXPECT_EQ(unit.grad_z, ones.grad_z);
+    EXPECT_EQ(unit.objective, ones.objective);
+}
+
+INSTANTIATE_TEST_SUITE_P(Physics, LatentPotentialPhysics,
+                         ::testing::Values(Case{"cloth", latent_test::cloth_physics, true},
+                                           Case{"solid", latent_test::solid_physics, true},
+                                           Case{"rods", latent_test::rod_physics, false}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(LatentPotential, NonFiniteEnergyThrowsInTheBatchAndIsReturnedForOneSample)
+{
+    Problem p(latent_test::cloth_physics(), 2, 5);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    p.X_prev(0, 1) = std::numeric_limits<double>::quiet_NaN();
+    try {
+        potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, {});
+        ADD_FAILURE() << "no NumericalError";
+    } catch (const NumericalError& e) {
+        EXPECT_STREQ(e.what(), "non-finite incremental potential in the training batch");
+    }
+    EXPECT_FALSE(std::isfinite(potential.value(p.Z.col(1), p.T.col(1), p.X_prev.col(1), p.X_prev2.col(1))));
+    EXPECT_TRUE(std::isfinite(potential.value(p.Z.col(0), p.T.col(0), p.X_prev.col(0), p.X_prev2.col(0))));
+}
+
+TEST(LatentPotential, WrongShapesThrow)
+{
+    Problem p(latent_test::cloth_physics(), 2, 6);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    LatentEnergyOptions options;
+    options.weights = VectorXd::Ones(3);
+    EXPECT_THROW(potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options), Error);
+    EXPECT_THROW(potential.evaluate(p.Z, p.T.leftCols(1), p.X_prev, p.X_prev2), Error);
+    EXPECT_THROW(potential.evaluate(p.Z.topRows(2), p.T, p.X_prev, p.X_prev2), Error);
+    EXPECT_THROW(potential.evaluate(p.Z, p.T, p.X_prev.topRows(3), p.X_prev2), Error);
+}
+
+} // namespace
+} // namespace lb
