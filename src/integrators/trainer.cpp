@@ -316,12 +316,7 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     loop.drop_last = true;  // floor(S / batch) Adam steps per epoch, as the published tables were trained
     loop.learning_rate = m_options.learning_rate;
     loop.seed = m_options.seed;
-    loop.max_seconds = m_options.max_seconds;
-    loop.checkpoint_path = m_options.checkpoint_path;
-    loop.checkpoint_every = m_options.checkpoint_every;
-    loop.resume = m_options.resume;
-    loop.progress = m_options.progress;
-    loop.interrupt = m_options.interrupt;
+    static_cast<nn::TrainingRunOptions&>(loop) = m_options;
     IntegratorLearner learner(*this, model, samples);
     const nn::TrainingLoopSummary s = nn::run_training_loop(learner, loop, fingerprint);
     summary.epochs_run = s.epochs_run;

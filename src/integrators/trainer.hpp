@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "integrators/latent_mlp_integrator.hpp"
+#include "nn/training_loop.hpp"
 #include "latent/latent_potential.hpp"
 #include "sim/physics_model.hpp"
 
@@ -33,7 +34,7 @@ enum class IntegratorLoss { SelfSupervised, SupervisedL2 };
 std::string to_string(IntegratorLoss loss);
 IntegratorLoss integrator_loss_from_string(const std::string& name);
 
-struct IntegratorTrainOptions {
+struct IntegratorTrainOptions : nn::TrainingRunOptions {
     IntegratorLoss loss = IntegratorLoss::SelfSupervised;
     std::vector<Index> hidden{256, 256, 256, 256, 256};
     int epochs = 1000;
@@ -45,21 +46,6 @@ struct IntegratorTrainOptions {
     double balancing_floor = 0.05;
     double penalty_weight = 1e5;  ///< w_bc (cloth, solids)
     std::uint64_t seed = 0;
-    /// Stop after this many seconds (0: no limit); the summary says so.
-    double max_seconds = 0.0;
-    /// Checkpoint file (empty: none), written every checkpoint_every epochs and at the end.
-    /// It is resumed only if it was made from the same resolved options, autoencoder,
-    /// training samples, physics and initial network (nn/checkpoint.hpp); otherwise it is
-    /// set aside as `<path>.stale` with a log line saying why.
-    std::string checkpoint_path;
-    int checkpoint_every = 100;
-    /// false: never resume; an existing checkpoint is set aside (the pipeline's --force).
-    bool resume = true;
-    bool progress = true;
-    /// Called after every epoch with the number of epochs completed; returning true stops
-    /// training there as a killed run would stop: no further checkpoint is written (the
-    /// last periodic one stays). For cancellation and tests; not part of the fingerprint.
-    std::function<bool(int epochs_done)> interrupt;
     /// One line for logs and file attributes.
     std::string describe() const;
 };

@@ -459,12 +459,7 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     loop.learning_rate = options.learning_rate;
     loop.seed = options.seed;
     loop.patience = options.patience;
-    loop.max_seconds = options.max_seconds;
-    loop.checkpoint_path = options.checkpoint_path;
-    loop.checkpoint_every = options.checkpoint_every;
-    loop.resume = options.resume;
-    loop.progress = options.progress;
-    loop.interrupt = options.interrupt;
+    static_cast<nn::TrainingRunOptions&>(loop) = options;
     AutoencoderLearner learner(ae, train_features, val_features);
     const nn::TrainingLoopSummary s = nn::run_training_loop(learner, loop, print);
 

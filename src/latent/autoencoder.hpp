@@ -22,11 +22,12 @@
 #include "core/rng.hpp"
 #include "latent/bc_encoding.hpp"
 #include "nn/sequential.hpp"
+#include "nn/training_loop.hpp"
 #include "sim/dataset.hpp"
 
 namespace lb {
 
-struct AutoencoderOptions {
+struct AutoencoderOptions : nn::TrainingRunOptions {
     // architecture
     Index latent_dim = 4;
     std::vector<Index> hidden{200, 200, 200};  ///< decoder widths after the latent; encoder mirrors them
@@ -42,19 +43,6 @@ struct AutoencoderOptions {
     /// Early stopping: stop after this many epochs without a validation improvement (0: never).
     int patience = 200;
     std::uint64_t seed = 0;
-    /// Stop after this many seconds (0: no limit); the summary says so.
-    double max_seconds = 0.0;
-    /// Checkpoint file (empty: none); training resumes from it if it exists and matches
-    /// (see train_autoencoder), otherwise it is set aside as `<path>.stale`.
-    std::string checkpoint_path;
-    int checkpoint_every = 100;
-    /// false: never resume; an existing checkpoint is set aside (the pipeline's --force).
-    bool resume = true;
-    bool progress = true;
-    /// Called after every epoch with the number of epochs completed; returning true stops
-    /// training there as a killed run would stop: no further checkpoint is written (the best
-    /// weights so far are still restored). For cancellation and tests; not fingerprinted.
-    std::function<bool(int epochs_done)> interrupt;
 };
 
 struct AutoencoderTrainSummary {

@@ -58,7 +58,27 @@ public:
     virtual void load_state(const h5::File& /*file*/) { }
 };
 
-struct TrainingLoopOptions {
+/// What every training run takes besides its hyper-parameters (the autoencoder's, the
+/// integrator's and any learned method's options derive from it).
+struct TrainingRunOptions {
+    /// Stop after this many seconds (0: no limit); the summary says so.
+    double max_seconds = 0.0;
+    /// Checkpoint file (empty: none), written every checkpoint_every epochs and at the end.
+    /// It is resumed only if its fingerprint (resolved options and content hashes of the
+    /// inputs, nn/checkpoint.hpp) matches; otherwise it is set aside as `<path>.stale`
+    /// with a log line saying why.
+    std::string checkpoint_path;
+    int checkpoint_every = 100;
+    /// false: never resume; an existing checkpoint is set aside (the pipeline's --force).
+    bool resume = true;
+    bool progress = true;
+    /// Called after every epoch with the number of epochs completed; returning true stops
+    /// training there as a killed run would stop: no further checkpoint is written (the
+    /// best weights so far are still restored). For cancellation and tests; not fingerprinted.
+    std::function<bool(int epochs_done)> interrupt;
+};
+
+struct TrainingLoopOptions : TrainingRunOptions {
     std::string label = "train";  ///< progress lines and messages
     int epochs = 100;
     Index batch_size = 256;
@@ -71,12 +91,6 @@ struct TrainingLoopOptions {
     double learning_rate = 1e-3;
     std::uint64_t seed = 0;
     int patience = 0;             ///< 0: no early stopping
-    double max_seconds = 0.0;     ///< 0: no time limit
-    std::string checkpoint_path;  ///< empty: no checkpoints
-    int checkpoint_every = 100;
-    bool resume = true;
-    bool progress = true;
-    std::function<bool(int epochs_done)> interrupt;
 };
 
 struct TrainingLoopSummary {
