@@ -69,7 +69,7 @@ void register_train_ae(CLI::App& app)
                     "validation MSE %.4e m², validation relative RMSE %.4e, %.1f s\n",
                     args->output.c_str(), data.scene_name.c_str(), long(ae.num_features()), long(ae.latent_dim()),
                     long(ae.options().pca_dim), s.epochs_run, s.best_epoch, s.stopped_early ? ", stopped early" : "",
-                    s.resumed ? ", resumed" : "", s.best_validation_mse, s.validation_relative_rmse, s.seconds);
+                    s.resumed ? ", resumed" : "", s.best_validation, s.validation_relative_rmse, s.seconds);
     });
 }
 

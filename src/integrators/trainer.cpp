@@ -275,7 +275,6 @@ private:
 IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const TrainingSamples& samples)
 {
     Timer timer;
-    IntegratorTrainSummary summary;
     const Index S = samples.size();
     // The fingerprint: resolved options and the inputs' contents, taken before anything
     // is loaded (the network part identifies the caller's initial weights).
@@ -318,14 +317,8 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     loop.seed = m_options.seed;
     static_cast<nn::TrainingRunOptions&>(loop) = m_options;
     IntegratorLearner learner(*this, model, samples);
-    const nn::TrainingLoopSummary s = nn::run_training_loop(learner, loop, fingerprint);
-    summary.epochs_run = s.epochs_run;
-    summary.final_loss = s.final_loss;
-    summary.resumed = s.resumed;
-    summary.time_limited = s.time_limited;
-    summary.interrupted = s.interrupted;
-    summary.checkpoint_refused = s.checkpoint_refused;
-    summary.seconds = timer.seconds();
+    IntegratorTrainSummary summary = nn::run_training_loop(learner, loop, fingerprint);
+    summary.seconds = timer.seconds();  // with the set-up above
     return summary;
 }
 

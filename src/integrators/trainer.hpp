@@ -72,16 +72,9 @@ struct IntegratorBatch {
     Index size() const { return z_prev.cols(); }
 };
 
-struct IntegratorTrainSummary {
-    int epochs_run = 0;
-    double final_loss = 0.0;
-    double seconds = 0.0;
-    bool resumed = false;
-    bool time_limited = false;
-    bool interrupted = false;  ///< stopped by options.interrupt
-    /// Why an existing checkpoint was not resumed (empty if none existed or it was resumed).
-    std::string checkpoint_refused;
-};
+/// What a training run did (epochs, final loss, resumed, time-limited, why a checkpoint
+/// was refused): the shared loop's summary.
+using IntegratorTrainSummary = nn::TrainingLoopSummary;
 
 class IntegratorTrainer {
 public:

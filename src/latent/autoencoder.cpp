@@ -461,25 +461,16 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     loop.patience = options.patience;
     static_cast<nn::TrainingRunOptions&>(loop) = options;
     AutoencoderLearner learner(ae, train_features, val_features);
-    const nn::TrainingLoopSummary s = nn::run_training_loop(learner, loop, print);
-
     AutoencoderTrainSummary summary;
-    summary.epochs_run = s.epochs_run;
-    summary.best_epoch = s.best_epoch;
+    static_cast<nn::TrainingLoopSummary&>(summary) = nn::run_training_loop(learner, loop, print);
     // No epoch run: the PCA-initialised network.
-    summary.best_validation_mse = s.best_epoch > 0 ? s.best_validation : eval_mse(ae, val_features);
-    summary.final_train_mse = s.final_loss;
-    summary.resumed = s.resumed;
-    summary.stopped_early = s.stopped_early;
-    summary.time_limited = s.time_limited;
-    summary.interrupted = s.interrupted;
-    summary.checkpoint_refused = s.checkpoint_refused;
+    if (summary.best_epoch == 0) summary.best_validation = eval_mse(ae, val_features);
     summary.validation_relative_rmse = ae.relative_rmse(val_positions, val_targets);
     summary.seconds = timer.seconds();
     if (options.progress)
         log_info("train-ae %s after %d epochs (best %d): validation MSE %.4e, relative RMSE %.4e, %.1fs",
                  summary.stopped_early ? "stopped early" : "finished", summary.epochs_run, summary.best_epoch,
-                 summary.best_validation_mse, summary.validation_relative_rmse, summary.seconds);
+                 summary.best_validation, summary.validation_relative_rmse, summary.seconds);
     return summary;
 }
 

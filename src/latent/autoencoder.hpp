@@ -45,20 +45,11 @@ struct AutoencoderOptions : nn::TrainingRunOptions {
     std::uint64_t seed = 0;
 };
 
-struct AutoencoderTrainSummary {
-    int epochs_run = 0;
-    int best_epoch = 0;
-    double best_validation_mse = 0.0;   ///< mean squared error per DOF (m²), best epoch
-    double final_train_mse = 0.0;       ///< training-mode loss averaged over the last epoch's batches
+/// The shared loop's summary (best_validation: mean squared error per DOF (m²) of the
+/// kept weights; final_loss: the last epoch's training-mode loss) plus the error in metres.
+struct AutoencoderTrainSummary : nn::TrainingLoopSummary {
     /// Relative RMS reconstruction error on validation frames: RMS(x̂ − x) / bbox diagonal.
     double validation_relative_rmse = 0.0;
-    double seconds = 0.0;
-    bool resumed = false;
-    bool stopped_early = false;
-    bool time_limited = false;
-    bool interrupted = false;  ///< stopped by options.interrupt
-    /// Why an existing checkpoint was not resumed (empty if none existed or it was resumed).
-    std::string checkpoint_refused;
 };
 
 class Autoencoder {

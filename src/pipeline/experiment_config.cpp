@@ -1,5 +1,6 @@
 #include "lb_paths.hpp"
 
+#include <cctype>
 #include <filesystem>
 
 #include "io/toml_config.hpp"
@@ -42,6 +43,20 @@ void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
     t.finish();
 }
 
+/// Names and labels become file and folder names under the run directory: letters,
+/// digits, '_', '-' and '.', not starting with '.', at most 64 characters (so no
+/// path separators, no "..", nothing a shell or a file system would interpret).
+bool is_safe_name(const std::string& name)
+{
+    if (name.empty() || name.size() > 64 || name.front() == '.') return false;
+    for (unsigned char c : name) {
+        if (!(std::isalnum(c) || c == '_' || c == '-' || c == '.')) return false;
+    }
+    return true;
+}
+
+constexpr const char* kSafeNameRule = "must be 1-64 letters, digits, '_', '-' or '.', not starting with '.'";
+
 /// The [[integrators]] entries, checked once for names (the methods parse them per scene).
 std::vector<ConfigTable> method_entries(ConfigTable& cfg, std::set<std::string>& names)
 {
@@ -49,7 +64,7 @@ std::vector<ConfigTable> method_entries(ConfigTable& cfg, std::set<std::string>&
     if (entries.empty()) cfg.fail("integrators", "at least one [[integrators]] entry is required");
     for (ConfigTable& t : entries) {
         const std::string name = t.require_string("name");
-        if (name.empty() || name.find_first_of("/ \t") != std::string::npos) t.fail("name", "must be a non-empty word");
+        if (!is_safe_name(name)) t.fail("name", std::string(kSafeNameRule) + " (got '" + name + "')");
         if (name == "full_space") t.fail("name", "'full_space' is reserved for the reference simulator");
         if (!names.insert(name).second) t.fail("name", "duplicate integrator name '" + name + "'");
     }
@@ -67,6 +82,7 @@ SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOp
     if (!fs::exists(sc.scene_path)) s.fail("scene", "file '" + sc.scene_path + "' does not exist");
     sc.variant = s.get_string("variant", "");
     sc.label = s.get_string("label", fs::path(sc.scene_path).stem().string() + (sc.variant.empty() ? "" : "_" + sc.variant));
+    if (!is_safe_name(sc.label)) s.fail("label", std::string(kSafeNameRule) + " (got '" + sc.label + "')");
     sc.autoencoder = ae_defaults;
     sc.latent_given = latent_default_given;
     if (auto t = s.table("autoencoder")) read_autoencoder(*t, sc.autoencoder, sc.latent_given);
@@ -92,6 +108,7 @@ AblationSpec read_ablation(ConfigTable a, const std::set<std::string>& names)
 {
     AblationSpec ab;
     ab.name = a.require_string("name");
+    if (!is_safe_name(ab.name)) a.fail("name", std::string(kSafeNameRule) + " (got '" + ab.name + "')");
     ab.title = a.get_string("title", ab.name);
     ab.methods = a.get_string_array("methods", {});
     for (const auto& m : ab.methods) {
@@ -119,6 +136,7 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
     ex.source = path;
     ex.toml_text = to_toml_string(root);
     ex.name = cfg.require_string("name");
+    if (!is_safe_name(ex.name)) cfg.fail("name", std::string(kSafeNameRule) + " (got '" + ex.name + "')");
     ex.description = cfg.get_string("description", "");
     ex.output_dir = cfg.get_string("output_dir", "runs/" + ex.name);
     ex.threads = int(cfg.get_int("threads", 0));

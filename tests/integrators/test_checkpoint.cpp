@@ -69,6 +69,8 @@ struct OptionChange {
     std::function<void(IntegratorTrainOptions&)> apply;
 };
 
+void PrintTo(const OptionChange& c, std::ostream* os) { *os << c.name; }
+
 class ChangedOption : public ::testing::TestWithParam<OptionChange> { };
 
 TEST_P(ChangedOption, IsNotResumed)

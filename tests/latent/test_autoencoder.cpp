@@ -280,7 +280,7 @@ TEST(AutoencoderTraining, SameSeedGivesBitwiseIdenticalWeights)
     const auto sa = train_autoencoder(a, data, o);
     const auto sb = train_autoencoder(b, data, o);
     EXPECT_TRUE(same_state(a, b));
-    EXPECT_EQ(sa.best_validation_mse, sb.best_validation_mse);
+    EXPECT_EQ(sa.best_validation, sb.best_validation);
 
     AutoencoderOptions other = o;
     other.seed = 2;  // different shuffling only
@@ -318,8 +318,8 @@ TEST(AutoencoderTraining, ResumingFromACheckpointEqualsTrainingStraight)
     EXPECT_TRUE(s_resumed.resumed);
     EXPECT_EQ(s_resumed.epochs_run, 6);
     EXPECT_EQ(s_resumed.best_epoch, s_straight.best_epoch);
-    EXPECT_EQ(s_resumed.best_validation_mse, s_straight.best_validation_mse);
-    EXPECT_EQ(s_resumed.final_train_mse, s_straight.final_train_mse);
+    EXPECT_EQ(s_resumed.best_validation, s_straight.best_validation);
+    EXPECT_EQ(s_resumed.final_loss, s_straight.final_loss);
     EXPECT_TRUE(same_state(straight, resumed)) << "N + resume N epochs differs from 2N straight";
 }
 
@@ -330,6 +330,8 @@ struct AeChange {
     const char* reason;  ///< the fingerprint part named in the refusal
     std::function<void(AutoencoderOptions&, std::uint64_t&, int&)> apply;  ///< options, init seed, frames
 };
+
+void PrintTo(const AeChange& c, std::ostream* os) { *os << c.name; }
 
 class AeChangedInput : public ::testing::TestWithParam<AeChange> { };
 
@@ -356,7 +358,7 @@ TEST_P(AeChangedInput, IsNotResumed)
     const auto s = train_autoencoder(second, other, o);
     EXPECT_FALSE(s.resumed);
     EXPECT_EQ(s.epochs_run, o.epochs);
-    EXPECT_GT(s.final_train_mse, 0.0);
+    EXPECT_GT(s.final_loss, 0.0);
     EXPECT_NE(s.checkpoint_refused.find(change.reason), std::string::npos)
         << "reason '" << s.checkpoint_refused << "' does not mention '" << change.reason << "'";
     EXPECT_TRUE(fs::exists(ckpt + ".stale"));
@@ -453,8 +455,8 @@ TEST(AutoencoderTraining, SmallClothReconstructsWithinOnePercentOfTheDiagonal)
         val_t.col(Index(i)) = frames.bc_targets.col(idx[i]);
     }
     const MatrixXd x_hat = ae.decode(ae.encode(val_x), val_t);
-    EXPECT_NEAR((x_hat - val_x).squaredNorm() / double(val_x.size()), s.best_validation_mse,
-                1e-9 * s.best_validation_mse);
+    EXPECT_NEAR((x_hat - val_x).squaredNorm() / double(val_x.size()), s.best_validation,
+                1e-9 * s.best_validation);
     EXPECT_NEAR(ae.relative_rmse(val_x, val_t), s.validation_relative_rmse, 1e-12);
 }
 
@@ -478,8 +480,8 @@ TEST(AutoencoderTraining, EarlyStoppingKeepsTheBestWeights)
         val_t.col(i) = frames.bc_targets.col(10 * i + 9);
     }
     const MatrixXd x_hat = ae.decode(ae.encode(val_x), val_t);
-    EXPECT_NEAR((x_hat - val_x).squaredNorm() / double(val_x.size()), s.best_validation_mse,
-                1e-9 * s.best_validation_mse);
+    EXPECT_NEAR((x_hat - val_x).squaredNorm() / double(val_x.size()), s.best_validation,
+                1e-9 * s.best_validation);
 }
 
 TEST(AutoencoderTraining, HandlesAHandfulOfFrames)

@@ -97,6 +97,20 @@ TEST(Experiment, RejectsBadKeysByName)
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("epochs"), std::string::npos) << e.what();
     }
+    // Names and labels become file names: a path or a shell fragment is refused by name.
+    for (const std::string& bad : {std::string("../escaped"), std::string("x';touch PWNED;echo '"), std::string(".hidden")}) {
+        text = kTiny;
+        text.replace(text.find("variant = \"small\""), 17, "variant = \"small\"\nlabel = \"" + bad + "\"");
+        try {
+            load_experiment(write_experiment("bad_label", text), builtin_methods());
+            FAIL() << "expected ConfigError for label " << bad;
+        } catch (const ConfigError& e) {
+            EXPECT_NE(std::string(e.what()).find("scenes[0].label"), std::string::npos) << e.what();
+        }
+    }
+    text = kTiny;
+    text.replace(text.find("name = \"sup\""), 12, "name = \"a/b\"");
+    EXPECT_THROW(load_experiment(write_experiment("bad_name", text), builtin_methods()), ConfigError);
     text = kTiny;
     text.replace(text.find("method = \"linear_pca\""), 21, "method = \"cubature\"");
     try {
