@@ -121,7 +121,7 @@ void register_rollout(CLI::App& app)
 {
     struct Args {
         std::string data, ae, integrator, method, output, name, sequences = "test";
-        int frames = 0;
+        long long frames = 0;  // range-checked before narrowing to int
         bool no_positions = false;
     };
     auto a = std::make_shared<Args>();
@@ -138,6 +138,8 @@ void register_rollout(CLI::App& app)
     cmd->callback([a] {
         if (a->integrator.empty() == a->method.empty())
             throw ConfigError("rollout: give either --integrator FILE (from `fit`) or --method NAME (nothing to fit)");
+        const std::string frames_problem = rollout_frames_problem(a->frames);
+        if (!frames_problem.empty()) throw ConfigError("rollout: --frames " + frames_problem);
         const MethodRegistry& registry = builtin_methods();
         const Dataset data = load_dataset(a->data);
         const PhysicsModel model(data.physics);
@@ -159,7 +161,7 @@ void register_rollout(CLI::App& app)
         const std::unique_ptr<Integrator> integrator = method->load(in, artefact.get(), label);
         std::vector<RolloutResult> results;
         RolloutOptions options;
-        options.max_frames = a->frames;
+        options.max_frames = int(a->frames);
         options.keep_positions = !a->no_positions;
         options.progress = log_level() >= LogLevel::Info;
         for (size_t k : select_sequences(data, a->sequences)) {

@@ -11,9 +11,24 @@ BoundaryState boundary_state(const SequenceData& sequence, Index t)
     return {sequence.bc_params.row(t).transpose(), sequence.bc_positions.row(t).transpose()};
 }
 
+std::string rollout_frames_problem(long long frames)
+{
+    if (frames == 0 || (frames >= kMinRolloutFrames && frames <= kMaxRolloutFrames)) return "";
+    return "must be 0 (the whole sequence) or between " + std::to_string(kMinRolloutFrames) +
+           " (two initial frames and one step) and " + std::to_string(kMaxRolloutFrames) + ", got " +
+           std::to_string(frames);
+}
+
 RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const SequenceData& sequence,
                       const RolloutOptions& options)
 {
+    // Frames 0 and 1 are copied from the ground truth below: shorter rollouts would
+    // write past a 1- or 2-row table.
+    const std::string problem = rollout_frames_problem(options.max_frames);
+    if (!problem.empty()) throw ConfigError("rollout: max_frames " + problem);
+    if (sequence.num_frames() < kMinRolloutFrames)
+        throw IoError("rollout: sequence '" + sequence.name + "' has " + std::to_string(sequence.num_frames()) +
+                      " frames; a rollout needs at least " + std::to_string(kMinRolloutFrames));
     const Index T = options.max_frames > 0 ? std::min<Index>(options.max_frames, sequence.num_frames())
                                            : sequence.num_frames();
     RolloutResult r;

@@ -11,8 +11,18 @@
 
 namespace lb {
 
+/// Shortest rollout: the two initial ground-truth frames and one step.
+inline constexpr long long kMinRolloutFrames = 3;
+/// Longest frame limit accepted from a config or the command line (10^7 frames,
+/// 3.9 days of simulated time at 30 fps); checked before any int conversion.
+inline constexpr long long kMaxRolloutFrames = 10'000'000;
+
+/// "" if `frames` is a valid rollout length limit (0: the whole sequence, or
+/// kMinRolloutFrames ≤ frames ≤ kMaxRolloutFrames), else what is wrong with it.
+std::string rollout_frames_problem(long long frames);
+
 struct RolloutOptions {
-    int max_frames = 0;  ///< 0: the whole sequence
+    int max_frames = 0;  ///< 0: the whole sequence; else at least kMinRolloutFrames
     bool keep_positions = true;
     bool progress = false;
 };
@@ -25,6 +35,8 @@ struct RolloutResult {
     RolloutSummary summary;
 };
 
+/// ConfigError if options.max_frames is invalid (rollout_frames_problem); IoError if
+/// the sequence has fewer than kMinRolloutFrames frames.
 RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const SequenceData& sequence,
                       const RolloutOptions& options = {});
 

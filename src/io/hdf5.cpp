@@ -28,6 +28,13 @@ public:
     Handle& operator=(const Handle&) = delete;
     hid_t get() const { return m_id; }
     bool valid() const { return m_id >= 0; }
+    /// Give up ownership (the caller closes the id).
+    hid_t release()
+    {
+        const hid_t id = m_id;
+        m_id = -1;
+        return id;
+    }
 
 private:
     hid_t m_id;
@@ -39,6 +46,86 @@ std::string parent_of(const std::string& name)
     const auto pos = name.find_last_of('/');
     if (pos == std::string::npos || pos == 0) return "/";
     return name.substr(0, pos);
+}
+
+/// Largest dataset (in entries) a reader allocates for: 2^31 entries (16 GiB of
+/// doubles), far beyond anything latentbench writes. A hostile or corrupt file can
+/// declare any extent (a chunked dataset of 10^12 unwritten entries is a few bytes).
+constexpr unsigned long long kMaxEntries = 1ULL << 31;
+/// Largest fixed-length string attribute or dataset read (bytes).
+constexpr size_t kMaxStringBytes = size_t(1) << 28;
+
+std::string describe_dims(const std::vector<hsize_t>& dims)
+{
+    std::string s = "(";
+    for (size_t i = 0; i < dims.size(); ++i) s += (i ? ", " : "") + std::to_string(dims[i]);
+    return s + (dims.size() == 1 ? ",)" : ")");
+}
+
+/// Why `space` does not hold exactly one value ("" if it does): a scalar dataspace or
+/// a simple one of one element is accepted, so h5py's `attrs['dt'] = [1/30]` still reads.
+std::string single_value_problem(hid_t space)
+{
+    switch (H5Sget_simple_extent_type(space)) {
+    case H5S_SCALAR: return "";
+    case H5S_NULL: return "holds no value (null dataspace)";
+    case H5S_SIMPLE: {
+        const int rank = H5Sget_simple_extent_ndims(space);
+        if (rank < 0) return "has an unreadable dataspace";
+        std::vector<hsize_t> dims(size_t(rank), 0);
+        H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+        if (H5Sget_simple_extent_npoints(space) == 1) return "";
+        return "must be a single value, found an array of shape " + describe_dims(dims);
+    }
+    default: return "has an unreadable dataspace";
+    }
+}
+
+std::string class_name(H5T_class_t c)
+{
+    switch (c) {
+    case H5T_INTEGER: return "an integer";
+    case H5T_FLOAT: return "a floating-point number";
+    case H5T_STRING: return "a string";
+    case H5T_COMPOUND: return "a compound type";
+    case H5T_ENUM: return "an enum";
+    case H5T_ARRAY: return "an array type";
+    case H5T_VLEN: return "a variable-length sequence";
+    case H5T_REFERENCE: return "a reference";
+    case H5T_OPAQUE: return "an opaque type";
+    case H5T_BITFIELD: return "a bitfield";
+    default: return "an unknown type";
+    }
+}
+
+/// Read one string value (scalar or 1-element, fixed or variable length) from an
+/// attribute or dataset whose type `ftype` has already been checked to be a string.
+/// `read` is H5Aread or H5Dread bound to the object; returns false on failure.
+template <typename Read>
+bool read_one_string(hid_t ftype, Read read, std::string& out, std::string& problem)
+{
+    if (H5Tis_variable_str(ftype) > 0) {
+        const hid_t mem = H5Tcopy(H5T_C_S1);
+        H5Tset_size(mem, H5T_VARIABLE);
+        H5Tset_cset(mem, H5Tget_cset(ftype));
+        char* ptr = nullptr;
+        const bool ok = read(mem, &ptr);
+        H5Tclose(mem);
+        if (!ok) return false;
+        out = ptr ? ptr : "";
+        H5free_memory(ptr);
+        return true;
+    }
+    const size_t n = H5Tget_size(ftype);
+    if (n == 0 || n > kMaxStringBytes) {
+        problem = "has an implausible string length of " + std::to_string(n) + " bytes";
+        return false;
+    }
+    std::string s(n + 1, '\0');  // room for a terminator HDF5 may not store
+    if (!read(ftype, s.data())) return false;
+    s.resize(std::strlen(s.c_str()));
+    out = std::move(s);
+    return true;
 }
 
 } // namespace
@@ -195,11 +282,27 @@ std::vector<hsize_t> File::shape(const std::string& name) const
 {
     Handle set(open_dataset(name), H5Dclose);
     Handle space(H5Dget_space(set.get()), H5Sclose);
+    if (!space.valid()) fail("cannot read shape", name);
+    if (H5Sget_simple_extent_type(space.get()) == H5S_NULL) fail("dataset holds no value (null dataspace)", name);
     const int rank = H5Sget_simple_extent_ndims(space.get());
     if (rank < 0) fail("cannot read shape", name);
     std::vector<hsize_t> dims(static_cast<size_t>(rank), 0);
     H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    unsigned long long entries = 1;
+    for (const hsize_t d : dims) {
+        if (d != 0 && entries > kMaxEntries / d) fail("shape " + describe_dims(dims) + " is too large to load", name);
+        entries *= d;
+    }
+    if (entries > kMaxEntries) fail("shape " + describe_dims(dims) + " is too large to load", name);
     return dims;
+}
+
+void File::check_numeric(hid_t set, const std::string& name) const
+{
+    Handle type(H5Dget_type(set), H5Tclose);
+    const H5T_class_t c = H5Tget_class(type.get());
+    if (c != H5T_INTEGER && c != H5T_FLOAT)
+        fail("expected a numeric dataset, found " + class_name(c), name);
 }
 
 namespace {
@@ -224,6 +327,7 @@ MatrixXd File::read_matrix(const std::string& name) const
     const auto dims = shape(name);
     if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
     Handle set(open_dataset(name), H5Dclose);
+    check_numeric(set.get(), name);
     return read_2d<double>(*this, set.get(), dims, H5T_NATIVE_DOUBLE, name);
 }
 
@@ -232,6 +336,7 @@ MatrixXf File::read_matrix_float(const std::string& name) const
     const auto dims = shape(name);
     if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
     Handle set(open_dataset(name), H5Dclose);
+    check_numeric(set.get(), name);
     return read_2d<float>(*this, set.get(), dims, H5T_NATIVE_FLOAT, name);
 }
 
@@ -240,6 +345,7 @@ MatrixXi File::read_matrix_int(const std::string& name) const
     const auto dims = shape(name);
     if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
     Handle set(open_dataset(name), H5Dclose);
+    check_numeric(set.get(), name);
     return read_2d<int>(*this, set.get(), dims, H5T_NATIVE_INT, name);
 }
 
@@ -248,6 +354,7 @@ VectorXd File::read_vector(const std::string& name) const
     const auto dims = shape(name);
     if (dims.size() != 1) fail("expected a 1-d dataset, found rank " + std::to_string(dims.size()), name);
     Handle set(open_dataset(name), H5Dclose);
+    check_numeric(set.get(), name);
     VectorXd v = read_2d<double>(*this, set.get(), dims, H5T_NATIVE_DOUBLE, name);
     return v;
 }
@@ -257,6 +364,7 @@ VectorXi File::read_vector_int(const std::string& name) const
     const auto dims = shape(name);
     if (dims.size() != 1) fail("expected a 1-d dataset, found rank " + std::to_string(dims.size()), name);
     Handle set(open_dataset(name), H5Dclose);
+    check_numeric(set.get(), name);
     VectorXi v = read_2d<int>(*this, set.get(), dims, H5T_NATIVE_INT, name);
     return v;
 }
@@ -268,6 +376,7 @@ std::vector<double> File::read_array(const std::string& name, std::vector<hsize_
     for (auto d : dims) n *= size_t(d);
     std::vector<double> data(n);
     Handle set(open_dataset(name), H5Dclose);
+    check_numeric(set.get(), name);
     if (n > 0 && H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0) {
         fail("cannot read dataset", name);
     }
@@ -277,17 +386,17 @@ std::vector<double> File::read_array(const std::string& name, std::vector<hsize_
 std::string File::read_string(const std::string& name) const
 {
     Handle set(open_dataset(name), H5Dclose);
+    Handle space(H5Dget_space(set.get()), H5Sclose);
+    const std::string problem = single_value_problem(space.get());
+    if (!problem.empty()) fail("string dataset " + problem, name);
     Handle type(H5Dget_type(set.get()), H5Tclose);
-    if (H5Tget_class(type.get()) != H5T_STRING) fail("expected a string dataset", name);
-    Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
-    H5Tset_size(mem.get(), H5T_VARIABLE);
-    H5Tset_cset(mem.get(), H5T_CSET_UTF8);
-    char* ptr = nullptr;
-    if (H5Dread(set.get(), mem.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &ptr) < 0) {
-        fail("cannot read string", name);
-    }
-    std::string s = ptr ? ptr : "";
-    H5free_memory(ptr);
+    const H5T_class_t c = H5Tget_class(type.get());
+    if (c != H5T_STRING) fail("expected a string dataset, found " + class_name(c), name);
+    std::string s, why;
+    const auto read = [&](hid_t mem, void* buf) {
+        return H5Dread(set.get(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0;
+    };
+    if (!read_one_string(type.get(), read, s, why)) fail(why.empty() ? "cannot read string" : "string dataset " + why, name);
     return s;
 }
 
@@ -352,35 +461,47 @@ bool File::has_attribute(const std::string& path, const std::string& key) const
     return obj.valid() && H5Aexists(obj.get(), key.c_str()) > 0;
 }
 
-std::string File::attribute_string(const std::string& path, const std::string& key) const
+hid_t File::open_attribute(const std::string& path, const std::string& key, AttributeKind expected) const
 {
-    if (!has_attribute(path, key)) fail("attribute '" + key + "' missing", path);
+    const std::string what = "attribute '" + key + "'";
+    if (!has_attribute(path, key)) fail(what + " missing", path);
     Handle obj(open_object(m_id, path), H5Oclose);
     Handle attr(H5Aopen(obj.get(), key.c_str(), H5P_DEFAULT), H5Aclose);
-    Handle ftype(H5Aget_type(attr.get()), H5Tclose);
-    if (H5Tget_class(ftype.get()) != H5T_STRING) fail("attribute '" + key + "' is not a string", path);
-    if (H5Tis_variable_str(ftype.get()) > 0) {
-        Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
-        H5Tset_size(mem.get(), H5T_VARIABLE);
-        H5Tset_cset(mem.get(), H5Tget_cset(ftype.get()));
-        char* ptr = nullptr;
-        if (H5Aread(attr.get(), mem.get(), &ptr) < 0) fail("cannot read attribute '" + key + "'", path);
-        std::string s = ptr ? ptr : "";
-        H5free_memory(ptr);
-        return s;
+    if (!attr.valid()) fail("cannot open " + what, path);
+    Handle space(H5Aget_space(attr.get()), H5Sclose);
+    const std::string problem = single_value_problem(space.get());
+    if (!problem.empty()) fail(what + " " + problem, path);
+    Handle type(H5Aget_type(attr.get()), H5Tclose);
+    const H5T_class_t c = H5Tget_class(type.get());
+    switch (expected) {
+    case AttributeKind::string:
+        if (c != H5T_STRING) fail(what + " must be a string, found " + class_name(c), path);
+        break;
+    case AttributeKind::integer:
+        if (c != H5T_INTEGER) fail(what + " must be an integer, found " + class_name(c), path);
+        break;
+    case AttributeKind::number:
+        if (c != H5T_INTEGER && c != H5T_FLOAT) fail(what + " must be a number, found " + class_name(c), path);
+        break;
     }
-    const size_t n = H5Tget_size(ftype.get());
-    std::string s(n, '\0');
-    if (H5Aread(attr.get(), ftype.get(), s.data()) < 0) fail("cannot read attribute '" + key + "'", path);
-    s.resize(std::strlen(s.c_str()));
+    return attr.release();
+}
+
+std::string File::attribute_string(const std::string& path, const std::string& key) const
+{
+    Handle attr(open_attribute(path, key, AttributeKind::string), H5Aclose);
+    Handle ftype(H5Aget_type(attr.get()), H5Tclose);
+    std::string s, why;
+    const auto read = [&](hid_t mem, void* buf) { return H5Aread(attr.get(), mem, buf) >= 0; };
+    if (!read_one_string(ftype.get(), read, s, why)) {
+        fail(why.empty() ? "cannot read attribute '" + key + "'" : "attribute '" + key + "' " + why, path);
+    }
     return s;
 }
 
 double File::attribute_double(const std::string& path, const std::string& key) const
 {
-    if (!has_attribute(path, key)) fail("attribute '" + key + "' missing", path);
-    Handle obj(open_object(m_id, path), H5Oclose);
-    Handle attr(H5Aopen(obj.get(), key.c_str(), H5P_DEFAULT), H5Aclose);
+    Handle attr(open_attribute(path, key, AttributeKind::number), H5Aclose);
     double value = 0.0;
     if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &value) < 0) fail("cannot read attribute '" + key + "'", path);
     return value;
@@ -388,9 +509,7 @@ double File::attribute_double(const std::string& path, const std::string& key) c
 
 long long File::attribute_int(const std::string& path, const std::string& key) const
 {
-    if (!has_attribute(path, key)) fail("attribute '" + key + "' missing", path);
-    Handle obj(open_object(m_id, path), H5Oclose);
-    Handle attr(H5Aopen(obj.get(), key.c_str(), H5P_DEFAULT), H5Aclose);
+    Handle attr(open_attribute(path, key, AttributeKind::integer), H5Aclose);
     long long value = 0;
     if (H5Aread(attr.get(), H5T_NATIVE_LLONG, &value) < 0) fail("cannot read attribute '" + key + "'", path);
     return value;
@@ -402,11 +521,12 @@ std::vector<std::string> File::list(const std::string& group) const
     Handle g(H5Gopen2(m_id, group.c_str(), H5P_DEFAULT), H5Gclose);
     if (!g.valid()) fail("not a group", group);
     H5G_info_t info;
-    H5Gget_info(g.get(), &info);
+    if (H5Gget_info(g.get(), &info) < 0) fail("cannot list group", group);
     std::vector<std::string> names;
     for (hsize_t i = 0; i < info.nlinks; ++i) {
         const ssize_t n = H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0,
                                              H5P_DEFAULT);
+        if (n < 0) fail("cannot list member " + std::to_string(i), group);
         std::string name(size_t(n), '\0');
         H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), size_t(n) + 1,
                            H5P_DEFAULT);

@@ -47,6 +47,10 @@ public:
     std::vector<hsize_t> shape(const std::string& name) const;
 
     /// Attributes on a group or dataset ("/" for the file root). Overwrites.
+    /// Readers accept exactly one value (scalar or 1-element dataspace) of the right
+    /// kind: strings fixed or variable length; attribute_int an integer type;
+    /// attribute_double an integer or floating type. Anything else is an IoError
+    /// naming the file, the object and the attribute; nothing is read unchecked.
     void set_attribute(const std::string& path, const std::string& key, const std::string& value);
     void set_attribute(const std::string& path, const std::string& key, double value);
     void set_attribute(const std::string& path, const std::string& key, long long value);
@@ -70,6 +74,13 @@ private:
     void write_raw(const std::string& name, const std::vector<hsize_t>& dims, hid_t mem_type,
                    hid_t file_type, const void* data);
     hid_t open_dataset(const std::string& name) const;
+    /// IoError unless dataset `set` has an integer or floating-point type.
+    void check_numeric(hid_t set, const std::string& name) const;
+    enum class AttributeKind { string, integer, number };
+    /// Open attribute `key` of `path` after checking that it holds one value (a scalar
+    /// or 1-element dataspace) of the `expected` kind (number: integer or floating);
+    /// IoError naming file, object and attribute otherwise. The caller closes the id.
+    hid_t open_attribute(const std::string& path, const std::string& key, AttributeKind expected) const;
     [[noreturn]] void fail(const std::string& what, const std::string& name) const;
 };
 

@@ -1,6 +1,7 @@
 #include "nn/architecture.hpp"
 
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <iomanip>
 #include <limits>
@@ -16,6 +17,12 @@
 namespace lb::nn {
 
 namespace {
+
+/// Layer widths above this are refused before anything is allocated (a corrupt
+/// "in": 1e15 would otherwise end in std::bad_alloc).
+constexpr Index kMaxWidth = Index(1) << 24;
+/// Entries of one weight matrix (in × out), 2^31 (16 GiB of doubles).
+constexpr Index kMaxWeights = Index(1) << 31;
 
 // ---- a minimal JSON reader (objects, arrays, strings, numbers, true/false/null) ----
 struct Json {
@@ -39,11 +46,13 @@ struct Json {
         if (type != Type::number) throw IoError("architecture: expected a number");
         return num;
     }
+    /// A layer width: an integer in [0, kMaxWidth] (checked before the cast, which is
+    /// undefined for values outside Index's range).
     Index index() const
     {
         const double v = number();
-        if (v < 0 || v != static_cast<double>(static_cast<Index>(v)))
-            throw IoError("architecture: expected a non-negative integer");
+        if (!(v >= 0 && v <= double(kMaxWidth)) || v != std::floor(v))
+            throw IoError("architecture: expected an integer width in [0, " + std::to_string(kMaxWidth) + "]");
         return static_cast<Index>(v);
     }
     const std::string& string() const
@@ -59,6 +68,9 @@ public:
 
     Json parse_document()
     {
+        if (m_s.size() > kMaxArchitectureBytes)
+            throw IoError("architecture: description of " + std::to_string(m_s.size()) + " bytes exceeds the limit of " +
+                          std::to_string(kMaxArchitectureBytes));
         Json v = value();
         skip_ws();
         if (m_pos != m_s.size()) error("trailing characters");
@@ -118,8 +130,23 @@ private:
         ++m_pos;
         return out;
     }
+    /// Nesting depth of the value being parsed: value() recurses once per '[' or '{',
+    /// so it is bounded to keep a hostile document from overflowing the stack.
+    struct DepthGuard {
+        Parser& p;
+        explicit DepthGuard(Parser& parser) : p(parser)
+        {
+            if (++p.m_depth > kMaxArchitectureDepth)
+                p.error("nested deeper than " + std::to_string(kMaxArchitectureDepth) + " levels");
+        }
+        ~DepthGuard() { --p.m_depth; }
+        DepthGuard(const DepthGuard&) = delete;
+        DepthGuard& operator=(const DepthGuard&) = delete;
+    };
+
     Json value()
     {
+        const DepthGuard guard(*this);
         skip_ws();
         if (m_pos >= m_s.size()) error("unexpected end");
         Json v;
@@ -158,6 +185,8 @@ private:
             v.type = Json::Type::number;
             v.num = std::strtod(begin, &end);
             if (end == begin) error("unexpected character");
+            // strtod also takes "nan", "inf" and overflows to inf; JSON has no such numbers.
+            if (!std::isfinite(v.num)) error("non-finite number");
             m_pos += static_cast<std::size_t>(end - begin);
         }
         return v;
@@ -165,6 +194,7 @@ private:
 
     const std::string& m_s;
     std::size_t m_pos = 0;
+    int m_depth = 0;
 };
 
 Sequential build_sequential(const Json& j);
@@ -173,9 +203,15 @@ std::unique_ptr<Layer> build_layer(const Json& j)
 {
     const std::string& type = j.at("type").string();
     if (type == "Sequential") return std::make_unique<Sequential>(build_sequential(j));
-    if (type == "Linear") return std::make_unique<Linear>(j.at("in").index(), j.at("out").index());
+    if (type == "Linear") {
+        const Index in = j.at("in").index(), out = j.at("out").index();
+        if (in > 0 && out > kMaxWeights / in)
+            throw IoError("architecture: Linear " + std::to_string(in) + " → " + std::to_string(out) + " is too large");
+        return std::make_unique<Linear>(in, out);
+    }
     if (type == "BatchNorm1d") {
         const double eps = j.has("eps") ? j.at("eps").number() : BatchNorm1d::default_eps;
+        if (!(eps > 0)) throw IoError("architecture: BatchNorm1d eps must be positive");
         const double momentum = j.has("momentum") ? j.at("momentum").number() : BatchNorm1d::default_momentum;
         return std::make_unique<BatchNorm1d>(j.at("features").index(), eps, momentum);
     }

@@ -17,6 +17,10 @@
 namespace lb::nn {
 
 inline constexpr const char* architecture_format = "latentbench.nn/1";
+/// Limits on a stored description (a real one is a few kB and ~6 levels deep):
+/// larger or deeper documents are refused as malformed, never parsed.
+inline constexpr std::size_t kMaxArchitectureBytes = std::size_t(1) << 20;
+inline constexpr int kMaxArchitectureDepth = 64;
 
 /// JSON description of `net`; `has_standardizer` records whether input
 /// standardisation statistics are stored with it.
@@ -28,7 +32,8 @@ struct Architecture {
 };
 
 /// Rebuild the layer structure from describe_architecture's output.
-/// Throws IoError with a message saying what is malformed.
+/// Throws IoError with a message saying what is malformed (including a document
+/// over kMaxArchitectureBytes or nested deeper than kMaxArchitectureDepth).
 Architecture parse_architecture(const std::string& json);
 
 } // namespace lb::nn

@@ -22,6 +22,23 @@ void check_shape(const h5::File& file, const std::string& name, const std::vecto
                       " does not match the architecture's " + describe_shape(expected));
 }
 
+/// IoError naming the file and dataset if `value` holds a NaN or an infinity (or, with
+/// `non_negative`, a negative entry): a network loaded from it would compute NaN silently.
+template <typename Derived>
+void require_finite(const h5::File& file, const std::string& name, const Eigen::DenseBase<Derived>& value,
+                    bool non_negative = false)
+{
+    if (!value.allFinite())
+        throw IoError("HDF5 file '" + file.path() + "', '" + name + "': non-finite value (NaN or inf)");
+    if (non_negative && value.size() > 0 && value.minCoeff() < 0)
+        throw IoError("HDF5 file '" + file.path() + "', '" + name + "': negative value");
+}
+
+bool ends_with(const std::string& s, const std::string& suffix)
+{
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 } // namespace
 
 void save_network(h5::File& file, const std::string& prefix, Sequential& net, const Standardizer* standardizer)
@@ -57,7 +74,13 @@ LoadedNetwork load_network(const h5::File& file, const std::string& prefix)
     if (!file.has_attribute("/", key))
         throw IoError("HDF5 file '" + file.path() + "': no attribute '" + key + "' (no network saved under prefix '" +
                       prefix + "')");
-    Architecture arch = parse_architecture(file.attribute_string("/", key));
+    const std::string description = file.attribute_string("/", key);
+    Architecture arch;
+    try {
+        arch = parse_architecture(description);
+    } catch (const IoError& e) {
+        throw IoError("HDF5 file '" + file.path() + "', attribute '" + key + "': " + e.what());
+    }
     LoadedNetwork out;
     out.network = std::move(arch.network);
     for (auto& p : out.network.parameters(prefix)) {
@@ -68,6 +91,7 @@ LoadedNetwork load_network(const h5::File& file, const std::string& prefix)
             check_shape(file, p.name, {hsize_t(p.value.rows()), hsize_t(p.value.cols())});
             p.value = file.read_matrix(p.name);
         }
+        require_finite(file, p.name, p.value);
     }
     for (auto& b : out.network.buffers(prefix)) {
         if (b.integer) {
@@ -75,9 +99,12 @@ LoadedNetwork load_network(const h5::File& file, const std::string& prefix)
             const std::vector<double> v = file.read_array(b.name, dims);
             if (v.size() != 1) throw IoError("HDF5 file '" + file.path() + "', '" + b.name + "': expected a scalar");
             b.value(0, 0) = v[0];
+            require_finite(file, b.name, b.value, /*non_negative=*/true);
         } else {
             check_shape(file, b.name, {hsize_t(b.value.rows())});
             b.value.col(0) = file.read_vector(b.name);
+            // A negative running variance makes sqrt(var + eps) NaN at inference.
+            require_finite(file, b.name, b.value, /*non_negative=*/ends_with(b.name, "running_var"));
         }
     }
     if (arch.has_standardizer) {
@@ -85,8 +112,11 @@ LoadedNetwork load_network(const h5::File& file, const std::string& prefix)
         const Index n = out.network.in_features();
         check_shape(file, m, {hsize_t(n)});
         check_shape(file, s, {hsize_t(n)});
+        const VectorXd mean = file.read_vector(m), stddev = file.read_vector(s);
+        require_finite(file, m, mean);
+        require_finite(file, s, stddev);
         try {
-            out.standardizer.emplace(file.read_vector(m), file.read_vector(s));
+            out.standardizer.emplace(mean, stddev);
         } catch (const std::invalid_argument& e) {
             throw IoError("HDF5 file '" + file.path() + "', '" + s + "': " + e.what());
         }
@@ -130,6 +160,9 @@ void load_adam_state(const h5::File& file, const std::string& prefix, Adam& adam
         for (const ParameterRef& p : params) {
             s.m.push_back(file.read_matrix(prefix + "adam/m/" + p.name));
             s.v.push_back(file.read_matrix(prefix + "adam/v/" + p.name));
+            require_finite(file, prefix + "adam/m/" + p.name, s.m.back());
+            // v is a running mean of squared gradients: sqrt(v) needs v ≥ 0.
+            require_finite(file, prefix + "adam/v/" + p.name, s.v.back(), /*non_negative=*/true);
             if (s.m.back().rows() != p.value.rows() || s.m.back().cols() != p.value.cols()) {
                 throw IoError("'" + file.path() + "': optimiser state for '" + p.name + "' has the wrong shape");
             }

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <filesystem>
 
+#include "eval/rollout.hpp"
 #include "io/toml_config.hpp"
 #include "pipeline/experiment.hpp"
 
@@ -155,9 +156,11 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
 
     if (auto t = cfg.table("evaluation")) {
         ex.sequences = t->get_string("sequences", ex.sequences);
-        ex.rollout_frames = int(t->get_int("frames", 0));
+        const long long frames = t->get_int("frames", 0);  // range-checked before narrowing to int
+        const std::string problem = rollout_frames_problem(frames);
+        if (!problem.empty()) t->fail("frames", problem);
+        ex.rollout_frames = int(frames);
         ex.full_space = t->get_bool("full_space", ex.full_space);
-        if (ex.rollout_frames < 0) t->fail("frames", "must be non-negative");
         t->finish();
     }
     if (auto t = cfg.table("outputs")) {

@@ -37,7 +37,8 @@ struct SimulateOptions {
     /// Stop with NumericalError if a step does not converge (default) instead of
     /// recording it and continuing.
     bool fail_on_nonconvergence = true;
-    /// Simulate at most this many frames per sequence (0: the scene's count); for tests.
+    /// Simulate at most this many frames per sequence (0: the scene's count; else ≥ 3,
+    /// the shortest sequence a dataset may hold); for tests.
     int max_frames = 0;
 };
 
@@ -46,7 +47,12 @@ Dataset simulate_scene(const Scene& scene, const SimulateOptions& options = {});
 
 /// Write atomically (temporary name, then rename).
 void save_dataset(const Dataset& data, const std::string& path);
-/// Read and validate shapes; IoError naming the file and dataset on any problem.
+/// Read, then validate every array against the others before use (one function,
+/// dataset.cpp `validate`): rest_positions N×3 (N ≥ 1), elements M×K (M ≥ 1, K of the
+/// object) and rods indexing [0, N), masses N positive, bc/indices B ≥ 1 distinct in
+/// [0, N); per sequence positions T×N×3 with T ≥ 3, bc_positions T×B×3, bc_params
+/// T×Scene::kNumBcParams, newton T×3, train_frames in [0, T]; dt, material and gravity
+/// in range; every array finite. IoError naming the file and dataset on any problem.
 Dataset load_dataset(const std::string& path);
 
 } // namespace lb

@@ -68,6 +68,10 @@ TEST(Dataset, RejectsWrongShapes)
         f.set_attribute("/", "scene", std::string("x"));
         f.set_attribute("/", "scene_toml", std::string(""));
         f.set_attribute("/", "object", std::string("solid"));
+        // Every attribute present, so that the shape is the only problem.
+        for (const char* key : {"dt", "youngs_modulus", "density"}) f.set_attribute("/", key, 1.0);
+        for (const char* key : {"poisson_ratio", "thickness", "radius"}) f.set_attribute("/", key, 0.0);
+        f.set_attribute("/", "num_sequences", 0LL);
     }
     try {
         load_dataset(dir + "/bad.h5");
