@@ -71,6 +71,8 @@ LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& pre
         m.output_scale.size() != m.latent_dim) {
         throw IoError("'" + file.path() + "': integrator network shapes disagree with its latent/parameter sizes");
     }
+    if (!m.output_scale.allFinite())
+        throw IoError("'" + file.path() + "', '" + prefix + "output_scale': non-finite value (NaN or inf)");
     return m;
 }
 

@@ -3,13 +3,34 @@
 
 #include "eval/rollout.hpp"
 #include "integrators/full_space_integrator.hpp"
+#include "core/error.hpp"
 #include "integrators/integrator_fixture.hpp"
+#include "integrators/latent_mlp_integrator.hpp"
+#include "io/hdf5.hpp"
 
 namespace lb {
 namespace {
 
 // The reference simulator rolled out through the Integrator interface and the
 // metrics pipeline reproduces its own dataset: errors vanish, KE ratio is 1.
+// A non-finite output scale in an integrator file is refused on load, naming the dataset.
+TEST(LatentMlpModel, NonFiniteOutputScaleIsRefused)
+{
+    LatentMlpModel m = LatentMlpModel::create(3, 6, {8}, 0);
+    m.output_scale(1) = std::numeric_limits<double>::quiet_NaN();
+    const std::string path = std::string(LB_TEST_TMP_DIR) + "/nan_output_scale.h5";
+    {
+        h5::File f = h5::File::create(path);
+        m.save(f, "integrator.");
+    }
+    try {
+        LatentMlpModel::load(h5::File::open(path), "integrator.");
+        FAIL() << "expected IoError";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("integrator.output_scale"), std::string::npos) << e.what();
+    }
+}
+
 TEST(Rollout, FullSpaceReproducesGroundTruth)
 {
     testing::TinyProblem p("cloth", 40);
