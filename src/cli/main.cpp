@@ -52,8 +52,17 @@ int main(int argc, char** argv)
     lb::cli::register_train_ae(app);
     try {
         app.parse(argc, argv);
-    } catch (const CLI::ParseError& e) {
+    } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        // A usage error is the user's, like a bad file: exit 1 with the same prefix
+        // (exit 2 is kept for internal errors).
+        std::fprintf(stderr, "latentbench: error: %s (see latentbench --help)\n", e.what());
+        return 1;
     } catch (const lb::Error& e) {
         std::fprintf(stderr, "latentbench: error: %s\n", e.what());
         return 1;

@@ -86,6 +86,19 @@ TEST(CliBadInput, CorruptDataset)
     EXPECT_NE(result.output.find("does not exist"), std::string::npos) << result.output;
 }
 
+// Usage errors (an unknown option, a missing argument, a non-numeric value) exit 1 with
+// the same `latentbench: error:` line as bad input; --help still exits 0.
+TEST(Cli, UsageErrorsExitOneWithTheErrorPrefix)
+{
+    for (const char* args : {"simulate --no-such-option", "simulate", "rollout x.h5 -o y.h5 --frames many", "frobnicate"}) {
+        const auto r = run_cli(args);
+        EXPECT_EQ(r.exit_code, 1) << args << ": " << r.output;
+        EXPECT_NE(r.output.find("latentbench: error:"), std::string::npos) << args << ": " << r.output;
+    }
+    EXPECT_EQ(run_cli("--help").exit_code, 0);
+    EXPECT_EQ(run_cli("simulate --help").exit_code, 0);
+}
+
 TEST(Cli, SimulateWritesReadableDataset)
 {
     const std::string dir = fresh_dir("cli_ok");
