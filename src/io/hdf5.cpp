@@ -281,7 +281,12 @@ hid_t File::open_dataset(const std::string& name) const
 std::vector<hsize_t> File::shape(const std::string& name) const
 {
     Handle set(open_dataset(name), H5Dclose);
-    Handle space(H5Dget_space(set.get()), H5Sclose);
+    return dataset_dims(set.get(), name);
+}
+
+std::vector<hsize_t> File::dataset_dims(hid_t set, const std::string& name) const
+{
+    Handle space(H5Dget_space(set), H5Sclose);
     if (!space.valid()) fail("cannot read shape", name);
     if (H5Sget_simple_extent_type(space.get()) == H5S_NULL) fail("dataset holds no value (null dataspace)", name);
     const int rank = H5Sget_simple_extent_ndims(space.get());
@@ -322,61 +327,39 @@ Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> read_2d(const File& f, hid
 }
 } // namespace
 
-MatrixXd File::read_matrix(const std::string& name) const
+template <typename Scalar>
+Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> File::read_numeric(const std::string& name, size_t rank,
+                                                                         hid_t mem_type) const
 {
-    const auto dims = shape(name);
-    if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
     Handle set(open_dataset(name), H5Dclose);
+    const auto dims = dataset_dims(set.get(), name);
+    if (dims.size() != rank)
+        fail("expected a " + std::to_string(rank) + "-d dataset, found rank " + std::to_string(dims.size()), name);
     check_numeric(set.get(), name);
-    return read_2d<double>(*this, set.get(), dims, H5T_NATIVE_DOUBLE, name);
+    return read_2d<Scalar>(*this, set.get(), dims, mem_type, name);
 }
+
+MatrixXd File::read_matrix(const std::string& name) const { return read_numeric<double>(name, 2, H5T_NATIVE_DOUBLE); }
 
 MatrixXf File::read_matrix_float(const std::string& name) const
 {
-    const auto dims = shape(name);
-    if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
-    Handle set(open_dataset(name), H5Dclose);
-    check_numeric(set.get(), name);
-    return read_2d<float>(*this, set.get(), dims, H5T_NATIVE_FLOAT, name);
+    return read_numeric<float>(name, 2, H5T_NATIVE_FLOAT);
 }
 
-MatrixXi File::read_matrix_int(const std::string& name) const
-{
-    const auto dims = shape(name);
-    if (dims.size() != 2) fail("expected a 2-d dataset, found rank " + std::to_string(dims.size()), name);
-    Handle set(open_dataset(name), H5Dclose);
-    check_numeric(set.get(), name);
-    return read_2d<int>(*this, set.get(), dims, H5T_NATIVE_INT, name);
-}
+MatrixXi File::read_matrix_int(const std::string& name) const { return read_numeric<int>(name, 2, H5T_NATIVE_INT); }
 
-VectorXd File::read_vector(const std::string& name) const
-{
-    const auto dims = shape(name);
-    if (dims.size() != 1) fail("expected a 1-d dataset, found rank " + std::to_string(dims.size()), name);
-    Handle set(open_dataset(name), H5Dclose);
-    check_numeric(set.get(), name);
-    VectorXd v = read_2d<double>(*this, set.get(), dims, H5T_NATIVE_DOUBLE, name);
-    return v;
-}
+VectorXd File::read_vector(const std::string& name) const { return read_numeric<double>(name, 1, H5T_NATIVE_DOUBLE); }
 
-VectorXi File::read_vector_int(const std::string& name) const
-{
-    const auto dims = shape(name);
-    if (dims.size() != 1) fail("expected a 1-d dataset, found rank " + std::to_string(dims.size()), name);
-    Handle set(open_dataset(name), H5Dclose);
-    check_numeric(set.get(), name);
-    VectorXi v = read_2d<int>(*this, set.get(), dims, H5T_NATIVE_INT, name);
-    return v;
-}
+VectorXi File::read_vector_int(const std::string& name) const { return read_numeric<int>(name, 1, H5T_NATIVE_INT); }
 
 std::vector<double> File::read_array(const std::string& name, std::vector<hsize_t>& dims) const
 {
-    dims = shape(name);
+    Handle set(open_dataset(name), H5Dclose);
+    dims = dataset_dims(set.get(), name);
+    check_numeric(set.get(), name);
     size_t n = 1;
     for (auto d : dims) n *= size_t(d);
     std::vector<double> data(n);
-    Handle set(open_dataset(name), H5Dclose);
-    check_numeric(set.get(), name);
     if (n > 0 && H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0) {
         fail("cannot read dataset", name);
     }

@@ -76,6 +76,12 @@ private:
     hid_t open_dataset(const std::string& name) const;
     /// IoError unless dataset `set` has an integer or floating-point type.
     void check_numeric(hid_t set, const std::string& name) const;
+    /// Extent of an open dataset, refusing null spaces and implausible sizes.
+    std::vector<hsize_t> dataset_dims(hid_t set, const std::string& name) const;
+    /// A numeric dataset of the given rank as a matrix (a vector for rank 1).
+    template <typename Scalar>
+    Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> read_numeric(const std::string& name, size_t rank,
+                                                                       hid_t mem_type) const;
     enum class AttributeKind { string, integer, number };
     /// Open attribute `key` of `path` after checking that it holds one value (a scalar
     /// or 1-element dataspace) of the `expected` kind (number: integer or floating);
