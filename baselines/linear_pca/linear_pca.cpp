@@ -179,9 +179,12 @@ StepTiming LinearPcaIntegrator::step(const BoundaryState& bc)
     ReducedObjective objective(m_J, m_c, m_potential, *m_assembler);
     // Warm start: constant-velocity extrapolation in the subspace.
     VectorXd q = 2.0 * m_q - m_q_prev;
-    if (!std::isfinite(objective.value(q))) q = m_q;  // fall back to the previous state
     ++m_steps;
-    const SolveSummary summary = minimize_newton(objective, q, m_newton, &m_workspace);
+    SolveSummary summary = minimize_newton(objective, q, m_newton, &m_workspace);
+    if (summary.termination == SolveTermination::NonFinite && summary.iterations == 0) {
+        q = m_q;  // the extrapolated start is not finite: start from the previous state
+        summary = minimize_newton(objective, q, m_newton, &m_workspace);
+    }
     m_iterations += summary.iterations;
     VectorXd x;
     if (summary.termination == SolveTermination::NonFinite) {

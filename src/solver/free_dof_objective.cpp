@@ -24,11 +24,7 @@ double FreeDofObjective::value(const Eigen::Ref<const VectorXd>& y) { return m_e
 
 void FreeDofObjective::gradient(const Eigen::Ref<const VectorXd>& y, Eigen::Ref<VectorXd> g)
 {
-    const VectorXd full = m_energies.gradient(full_state(y));
-    const VectorXi& map = m_assembler.dof_to_unknown();
-    for (Index dof = 0; dof < map.size(); ++dof) {
-        if (map[dof] >= 0) g[map[dof]] = full[dof];
-    }
+    g = m_assembler.restrict(m_energies.gradient(full_state(y)));
 }
 
 double FreeDofObjective::value_and_gradient(const Eigen::Ref<const VectorXd>& y, Eigen::Ref<VectorXd> g)
