@@ -60,7 +60,6 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
 
 TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
 {
-    std::vector<Index> counts;
     Index total = 0;
     for (const auto& s : data.sequences) total += std::max<Index>(s.train_frames - 2, 0);
     if (total == 0) throw Error("dataset has no training samples (every sequence needs train_frames ≥ 3)");

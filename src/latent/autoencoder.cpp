@@ -60,9 +60,6 @@ void validate_training(const AutoencoderOptions& o)
     if (o.checkpoint_every < 1) throw ConfigError("autoencoder: checkpoint_every must be ≥ 1");
 }
 
-/// Copy parameters and buffers of `src` into `dst` (same structure; storage of `dst` kept).
-void copy_state(nn::Sequential& dst, nn::Sequential& src) { nn::copy_network_state(dst, src); }
-
 nn::Linear& linear_layer(nn::Sequential& net, Index i, const char* what)
 {
     auto* lin = dynamic_cast<nn::Linear*>(&net.layer(i));
@@ -356,13 +353,13 @@ public:
     double validation_loss() override { return eval_mse(m_ae, m_val); }
     void snapshot_best() override
     {
-        copy_state(m_best_enc, m_ae.encoder());
-        copy_state(m_best_dec, m_ae.decoder());
+        nn::copy_network_state(m_best_enc, m_ae.encoder());
+        nn::copy_network_state(m_best_dec, m_ae.decoder());
     }
     void restore_best() override
     {
-        copy_state(m_ae.encoder(), m_best_enc);
-        copy_state(m_ae.decoder(), m_best_dec);
+        nn::copy_network_state(m_ae.encoder(), m_best_enc);
+        nn::copy_network_state(m_ae.decoder(), m_best_dec);
     }
     void save_state(h5::File& file) override
     {
@@ -373,21 +370,21 @@ public:
     }
     void load_state(const h5::File& file) override
     {
-        // Everything into temporaries first (copy_state checks names and shapes), then commit.
+        // Everything into temporaries first (copy_network_state checks names and shapes), then commit.
         auto load_like = [&](nn::Sequential& like, const std::string& prefix) {
             nn::Sequential loaded = nn::load_network(file, prefix).network;
             nn::Sequential out(like);
-            copy_state(out, loaded);
+            nn::copy_network_state(out, loaded);
             return out;
         };
         nn::Sequential enc = load_like(m_ae.encoder(), "encoder.");
         nn::Sequential dec = load_like(m_ae.decoder(), "decoder.");
         nn::Sequential benc = load_like(m_best_enc, "best_encoder.");
         nn::Sequential bdec = load_like(m_best_dec, "best_decoder.");
-        copy_state(m_ae.encoder(), enc);
-        copy_state(m_ae.decoder(), dec);
-        copy_state(m_best_enc, benc);
-        copy_state(m_best_dec, bdec);
+        nn::copy_network_state(m_ae.encoder(), enc);
+        nn::copy_network_state(m_ae.decoder(), dec);
+        nn::copy_network_state(m_best_enc, benc);
+        nn::copy_network_state(m_best_dec, bdec);
     }
 
 private:
