@@ -77,14 +77,23 @@ TEST(ArchitectureLimits, NonFiniteAndHugeNumbersAreRefused)
     EXPECT_EQ(parse_architecture(linear("4", "3")).network.out_features(), 3);
 }
 
-TEST(ArchitectureLimits, LoadNetworkNamesTheFileAndAttribute)
+/// A small 3 → hidden → 2 MLP (with BatchNorm if asked) for the file tests below.
+Sequential small_net(std::uint64_t seed, Index hidden, bool batch_norm, Rng* rng_out = nullptr)
 {
-    Rng rng(7);
+    Rng rng(seed);
     MlpSpec s;
     s.in_dim = 3;
-    s.hidden = {5};
+    s.hidden = {hidden};
     s.out_dim = 2;
+    s.batch_norm = batch_norm;
     Sequential net = make_mlp(s, rng);
+    if (rng_out) *rng_out = rng;
+    return net;
+}
+
+TEST(ArchitectureLimits, LoadNetworkNamesTheFileAndAttribute)
+{
+    Sequential net = small_net(7, 5, false);
     const std::string path = tmp_path("deep.h5");
     {
         h5::File f = h5::File::create(path);
@@ -99,13 +108,8 @@ TEST(ArchitectureLimits, LoadNetworkNamesTheFileAndAttribute)
 void expect_load_refused(const std::string& name, const std::function<void(h5::File&)>& mutate,
                          const std::vector<std::string>& parts)
 {
-    Rng rng(11);
-    MlpSpec s;
-    s.in_dim = 3;
-    s.hidden = {5};
-    s.out_dim = 2;
-    s.batch_norm = true;
-    Sequential net = make_mlp(s, rng);
+    Rng rng(0);
+    Sequential net = small_net(11, 5, true, &rng);
     const Standardizer st = Standardizer::fit(test::random_matrix(3, 20, rng, -2, 2));
     const std::string path = tmp_path(name + ".h5");
     {
@@ -128,13 +132,7 @@ void expect_load_refused(const std::string& name, const std::function<void(h5::F
 /// The first parameter, buffer and running variance names of the test network.
 std::string first_name(const std::string& suffix)
 {
-    Rng rng(11);
-    MlpSpec s;
-    s.in_dim = 3;
-    s.hidden = {5};
-    s.out_dim = 2;
-    s.batch_norm = true;
-    Sequential net = make_mlp(s, rng);
+    Sequential net = small_net(11, 5, true);
     for (const auto& p : net.parameters("net."))
         if (p.name.size() >= suffix.size() && p.name.compare(p.name.size() - suffix.size(), suffix.size(), suffix) == 0)
             return p.name;
@@ -185,12 +183,8 @@ TEST(NonFiniteNetworks, WeightsBuffersAndStandardizerAreRefused)
 
 TEST(NonFiniteNetworks, AdamStateIsRefused)
 {
-    Rng rng(12);
-    MlpSpec s;
-    s.in_dim = 3;
-    s.hidden = {4};
-    s.out_dim = 2;
-    Sequential net = make_mlp(s, rng);
+    Rng rng(0);
+    Sequential net = small_net(12, 4, false, &rng);
     std::vector<ParameterRef> params = net.parameters("net.");
     Adam adam(params);
     for (auto& p : params) p.grad.setOnes();
