@@ -58,9 +58,9 @@ private:
 std::unique_ptr<Method> parse_linear_pca(ConfigTable& entry, ConfigTable&)
 {
     LinearPcaOptions o;
-    o.dim = Index(entry.get_int("dim", 0));
+    o.dim = Index(entry.get_int("dim", 0, 0, kMaxWidth));
     o.penalty_weight = entry.get_double("penalty_weight", o.penalty_weight);
-    o.max_iterations = int(entry.get_int("max_iterations", o.max_iterations));
+    o.max_iterations = entry.get_count("max_iterations", o.max_iterations, 1, 1'000'000);
     o.gradient_tolerance = entry.get_double("gradient_tolerance", o.gradient_tolerance);
     o.step_tolerance = entry.get_double("step_tolerance", o.step_tolerance);
     if (o.dim < 0) entry.fail("dim", "must be positive (or omitted: the scene's latent size)");

@@ -5,9 +5,11 @@
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/parse.hpp"
 #include "eval/rollout.hpp"
+#include "io/atomic_file.hpp"
 #include "eval/summary_schema.hpp"
 #include "io/hdf5.hpp"
 #include "latent/autoencoder.hpp"
@@ -19,9 +21,10 @@ namespace lb::cli {
 
 std::vector<Index> parse_hidden_option(const std::string& text)
 {
-    const auto widths = parse_positive_list(text);
+    const auto widths = parse_positive_list(text, kMaxWidth);
     if (!widths || widths->empty())
-        throw ConfigError("--hidden: expected comma-separated positive widths such as 256,256,256 (got '" + text + "')");
+        throw ConfigError("--hidden: expected comma-separated widths in [1, " + std::to_string(kMaxWidth) +
+                          "] such as 256,256,256 (got '" + text + "')");
     return *widths;
 }
 
@@ -97,6 +100,8 @@ void register_fit(CLI::App& app)
     cmd->add_option("--set", a->set, "Method option key=value, as in an [[integrators]] entry (repeatable)");
     cmd->add_option("--checkpoint", a->checkpoint, "Training checkpoint (resumed only if it matches)");
     cmd->callback([a] {
+        check_output_path(a->output, "-o");
+        if (!a->checkpoint.empty()) check_output_path(a->checkpoint, "--checkpoint");
         const MethodRegistry& registry = builtin_methods();
         std::unique_ptr<Method> method = registry.parse_text(a->method, options_from_pairs(a->set), "--set");
         if (!method->has_artefact()) throw ConfigError("fit: method '" + a->method + "' has nothing to fit");
@@ -138,6 +143,7 @@ void register_rollout(CLI::App& app)
     cmd->callback([a] {
         if (a->integrator.empty() == a->method.empty())
             throw ConfigError("rollout: give either --integrator FILE (from `fit`) or --method NAME (nothing to fit)");
+        check_output_path(a->output, "-o");
         const std::string frames_problem = rollout_frames_problem(a->frames);
         if (!frames_problem.empty()) throw ConfigError("rollout: --frames " + frames_problem);
         const MethodRegistry& registry = builtin_methods();

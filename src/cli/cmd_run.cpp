@@ -3,14 +3,39 @@
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
 #include "pipeline/experiment.hpp"
+#include "scene/scene.hpp"
 
 namespace lb::cli {
+namespace {
+
+/// `run --check`: every scene loaded and validated, then what would run.
+void print_plan(const ExperimentConfig& ex, const std::string& run_dir)
+{
+    std::printf("experiment %s: %zu scenes, run directory %s\n", ex.name.c_str(), ex.scenes.size(), run_dir.c_str());
+    for (const SceneSpec& s : ex.scenes) {
+        const Scene scene = load_scene(s.scene_path, {s.variant});
+        long frames = 0;
+        for (const SequenceSpec& q : scene.sequences) frames += q.frames;
+        std::printf("  %s: %s, %ld vertices, %zu sequences, %ld frames; autoencoder latent %ld, %d epochs\n",
+                    s.label.c_str(), s.scene_path.c_str(), long(scene.mesh.num_vertices()), scene.sequences.size(),
+                    frames, long(s.autoencoder.latent_dim), s.autoencoder.epochs);
+        for (const MethodSpec& m : s.methods)
+            std::printf("    %-20s %s\n", m.name.c_str(), m.method->method_name().c_str());
+    }
+    std::printf("evaluation: sequences %s, frames %s, full_space %s\n", ex.sequences.c_str(),
+                ex.rollout_frames > 0 ? std::to_string(ex.rollout_frames).c_str() : "all",
+                ex.full_space ? "yes" : "no");
+    std::printf("the configuration is valid; nothing was run\n");
+}
+
+} // namespace
 
 void register_run(CLI::App& app)
 {
     struct Args {
         std::string experiment, output;
         std::vector<std::string> force;
+        bool check = false;
     };
     auto a = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("run", "Run an experiment suite: simulate, train, roll out, tables, plots (cached stages)");
@@ -18,8 +43,13 @@ void register_run(CLI::App& app)
     cmd->add_option("-o,--output", a->output, "Run directory (default: the experiment's output_dir)");
     cmd->add_option("--force", a->force,
                     "Redo a stage even if cached: simulate, autoencoder, integrators, rollouts, tables, plots, all");
+    cmd->add_flag("--check", a->check, "Validate the suite and its scenes, print the plan and run nothing");
     cmd->callback([a] {
         const ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
+        if (a->check) {
+            print_plan(ex, a->output.empty() ? ex.output_dir : a->output);
+            return;
+        }
         RunOptions options;
         options.output_dir = a->output;
         options.force.insert(a->force.begin(), a->force.end());

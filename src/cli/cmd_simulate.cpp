@@ -2,7 +2,9 @@
 
 #include "cli/commands.hpp"
 #include "core/log.hpp"
+#include "eval/rollout.hpp"
 #include "core/timer.hpp"
+#include "io/atomic_file.hpp"
 #include "scene/scene.hpp"
 #include "sim/dataset.hpp"
 
@@ -16,18 +18,30 @@ void register_simulate(CLI::App& app)
         std::string output;
         int max_frames = 0;
         bool allow_nonconvergence = false;
+        bool check = false;
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("simulate", "Simulate every sequence of a scene in full space and write an HDF5 dataset");
     cmd->add_option("scene", args->scene, "Scene TOML file (experiments/scenes/*.toml)")->required();
     cmd->add_option("--variant", args->variant, "Scene variant, e.g. 'small'");
-    cmd->add_option("-o,--output", args->output, "Output HDF5 file")->required();
-    cmd->add_option("--max-frames", args->max_frames, "Simulate at most this many frames per sequence");
+    cmd->add_option("-o,--output", args->output, "Output HDF5 file (required unless --check)");
+    cmd->add_option("--max-frames", args->max_frames, "Simulate at most this many frames per sequence (0: all)")
+        ->check(CLI::Range(0, int(kMaxRolloutFrames)));
     cmd->add_flag("--allow-nonconvergence", args->allow_nonconvergence,
                   "Record Newton failures and continue instead of stopping");
+    cmd->add_flag("--check", args->check, "Validate the scene, print its summary and simulate nothing");
     cmd->callback([args] {
         Timer timer;
+        if (!args->check) check_output_path(args->output, "-o");
         const Scene scene = load_scene(args->scene, {args->variant});
+        if (args->check) {
+            std::printf("scene '%s'%s: %ld vertices, %ld elements, %zu Dirichlet vertices, %zu sequences, dt %.4g s; "
+                        "valid, nothing simulated\n",
+                        scene.name.c_str(), scene.variant.empty() ? "" : (" (" + scene.variant + ")").c_str(),
+                        long(scene.mesh.num_vertices()), long(scene.mesh.elements.rows()), scene.bc_indices.size(),
+                        scene.sequences.size(), scene.dt);
+            return;
+        }
         log_info("scene '%s'%s: %ld vertices, %ld elements, %zu Dirichlet vertices, %zu sequences, dt %.4g s",
                  scene.name.c_str(), scene.variant.empty() ? "" : (" (" + scene.variant + ")").c_str(),
                  long(scene.mesh.num_vertices()), long(scene.mesh.elements.rows()), scene.bc_indices.size(),

@@ -3,7 +3,9 @@
 #include "paper/scene_defaults.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "core/log.hpp"
+#include "io/atomic_file.hpp"
 #include "latent/autoencoder.hpp"
 #include "sim/dataset.hpp"
 
@@ -31,21 +33,31 @@ void register_train_ae(CLI::App& app)
     cmd->add_option("data", args->data, "Dataset HDF5 file (from 'latentbench simulate')")->required();
     cmd->add_option("-o,--output", args->output, "Output autoencoder HDF5 file")->required();
     cmd->add_option("--latent", args->latent,
-                    "Latent dimension (default per scene: rods 4, cloth 4, armadillo 12, bunny_ears 8, cantilever 4)");
-    cmd->add_option("--epochs", args->epochs, "Epochs (total, including resumed ones)")->capture_default_str();
-    cmd->add_option("--batch", args->batch, "Mini-batch size")->capture_default_str();
+                    "Latent dimension (default per scene: rods 4, cloth 4, armadillo 12, bunny_ears 8, cantilever 4)")
+        ->check(CLI::Range(0L, long(kMaxWidth)));
+    cmd->add_option("--epochs", args->epochs, "Epochs (total, including resumed ones)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, kMaxEpochs));
+    cmd->add_option("--batch", args->batch, "Mini-batch size")->capture_default_str()->check(CLI::Range(2, kMaxBatch));
     cmd->add_option("--lr", args->lr, "Adam learning rate")->capture_default_str();
-    cmd->add_option("--pca", args->pca, "Width of the PCA layers (clamped to frames − 1 and features; 0: none)")->capture_default_str();
+    cmd->add_option("--pca", args->pca, "Width of the PCA layers (clamped to frames − 1 and features; 0: none)")
+        ->capture_default_str()
+        ->check(CLI::Range(0L, long(kMaxWidth)));
     cmd->add_option("--hidden", args->hidden, "Decoder hidden widths after the latent; the encoder mirrors them")->capture_default_str();
     cmd->add_option("--seed", args->seed, "Seed of the initialisation and the shuffling")->capture_default_str();
     cmd->add_option("--checkpoint", args->checkpoint,
                     "Checkpoint file: written periodically, resumed from if it exists and matches");
-    cmd->add_option("--checkpoint-every", args->checkpoint_every, "Epochs between checkpoints")->capture_default_str();
-    cmd->add_option("--patience", args->patience, "Early stopping patience in epochs (0: never)")->capture_default_str();
+    cmd->add_option("--checkpoint-every", args->checkpoint_every, "Epochs between checkpoints")
+        ->capture_default_str()
+        ->check(CLI::Range(1, kMaxEpochs));
+    cmd->add_option("--patience", args->patience, "Early stopping patience in epochs (0: never)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, kMaxEpochs));
     cmd->add_option("--validation", args->validation,
                     "Fraction of training frames held out for validation (every k-th frame)")->capture_default_str();
     cmd->callback([args] {
-        if (args->latent < 0) throw ConfigError("--latent must be positive (got " + std::to_string(args->latent) + ")");
+        check_output_path(args->output, "-o");
+        if (!args->checkpoint.empty()) check_output_path(args->checkpoint, "--checkpoint");
         const Dataset data = load_dataset(args->data);
         AutoencoderOptions options;
         options.latent_dim = args->latent > 0 ? Index(args->latent) : default_latent_dim(data.scene_name);

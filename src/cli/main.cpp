@@ -9,6 +9,7 @@
 
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/parallel.hpp"
 
@@ -35,7 +36,8 @@ int main(int argc, char** argv)
     app.require_subcommand(1);
     bool quiet = false, verbose = false;
     int threads = 0;
-    app.add_option("-j,--threads", threads, "Threads for parallel loops (default: all cores)");
+    app.add_option("-j,--threads", threads, "Threads for parallel loops (default: all cores)")
+        ->check(CLI::Range(0, lb::kMaxThreads));
     app.add_flag("-q,--quiet", quiet, "Only print errors and results");
     app.add_flag("-v,--verbose", verbose, "Print debug messages");
     app.parse_complete_callback([&] {

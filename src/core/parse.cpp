@@ -5,7 +5,7 @@
 
 namespace lb {
 
-std::optional<std::vector<Index>> parse_positive_list(const std::string& text)
+std::optional<std::vector<Index>> parse_positive_list(const std::string& text, Index max)
 {
     std::vector<Index> values;
     if (text.empty()) return values;
@@ -14,7 +14,7 @@ std::optional<std::vector<Index>> parse_positive_list(const std::string& text)
     while (std::getline(ss, item, ',')) {
         char* end = nullptr;
         const long long v = std::strtoll(item.c_str(), &end, 10);
-        if (item.empty() || end == item.c_str() || *end != '\0' || v <= 0) return std::nullopt;
+        if (item.empty() || end == item.c_str() || *end != '\0' || v <= 0 || v > max) return std::nullopt;
         values.push_back(static_cast<Index>(v));
     }
     return values;

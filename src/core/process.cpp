@@ -1,11 +1,15 @@
 #include "core/process.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
+#include <thread>
 
 #include "core/error.hpp"
 
@@ -33,8 +37,23 @@ int run_process(const std::vector<std::string>& argv, const ProcessOptions& opti
     posix_spawn_file_actions_destroy(&actions);
     if (rc != 0) throw Error("cannot run '" + argv[0] + "': " + std::strerror(rc));
     int status = 0;
-    while (waitpid(pid, &status, 0) < 0) {
-        if (errno != EINTR) throw Error("waiting for '" + argv[0] + "' failed: " + std::strerror(errno));
+    const auto start = std::chrono::steady_clock::now();
+    auto pause = std::chrono::microseconds(500);
+    for (;;) {
+        const pid_t done = waitpid(pid, &status, options.timeout_seconds > 0.0 ? WNOHANG : 0);
+        if (done == pid) break;
+        if (done < 0) {
+            if (errno == EINTR) continue;
+            throw Error("waiting for '" + argv[0] + "' failed: " + std::strerror(errno));
+        }
+        const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
+        if (elapsed.count() > options.timeout_seconds) {
+            ::kill(pid, SIGKILL);
+            while (waitpid(pid, &status, 0) < 0 && errno == EINTR) { }
+            return kProcessTimedOut;
+        }
+        std::this_thread::sleep_for(pause);
+        pause = std::min(pause * 2, std::chrono::microseconds(20000));
     }
     if (WIFEXITED(status)) return WEXITSTATUS(status);
     if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);

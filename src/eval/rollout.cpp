@@ -71,9 +71,7 @@ RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const S
 
 void save_rollouts(const std::vector<RolloutResult>& results, const std::string& path, const std::string& config_text)
 {
-    h5::AtomicOutput out(path);
-    {
-        h5::File f = h5::File::create(out.temp_path());
+    h5::write_file_atomically(path, [&](h5::File& f) {
         f.set_attribute("/", "config", config_text);
         f.set_attribute("/", "num_rollouts", (long long)results.size());
         std::string columns;
@@ -91,8 +89,7 @@ void save_rollouts(const std::vector<RolloutResult>& results, const std::string&
             f.set_attribute(g, "sequence", r.sequence);
             write_summary(f, g, r.summary);
         }
-    }
-    out.commit();
+    });
 }
 
 std::vector<size_t> select_sequences(const Dataset& data, const std::string& which)

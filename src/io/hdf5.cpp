@@ -1,19 +1,27 @@
 #include "io/hdf5.hpp"
 
-#include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 
 #include "core/error.hpp"
+#include "io/atomic_file.hpp"
 
 namespace lb::h5 {
 namespace {
 
 struct Silence {
-    // HDF5 prints its own error stack to stderr; we report through exceptions.
-    Silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+    Silence()
+    {
+        // Every file is closed (and checked) before it is renamed, so HDF5's exit-time
+        // clean-up has nothing to do, except after a failed close (a full disk), where
+        // HDF5 1.10 crashes closing the half-closed file again: skip it.
+        H5dont_atexit();
+        // HDF5 prints its own error stack to stderr; we report through exceptions.
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    }
 };
 const Silence g_silence;
 
@@ -173,6 +181,17 @@ File File::open(const std::string& path, bool writable)
     return File(id, path);
 }
 
+namespace {
+
+/// Why a write failed, as far as the C library knows (HDF5 reports no cause).
+std::string write_cause()
+{
+    if (errno == ENOSPC || errno == EDQUOT) return " (no space left on device)";
+    return " (disk full or I/O error?)";
+}
+
+} // namespace
+
 void File::fail(const std::string& what, const std::string& name) const
 {
     throw IoError("HDF5 file '" + m_path + "', '" + name + "': " + what);
@@ -198,7 +217,7 @@ void File::create_group(const std::string& group)
     if (group.empty() || group == "/" || exists(group)) return;
     create_group(parent_of(group));
     Handle g(H5Gcreate2(m_id, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
-    if (!g.valid()) fail("cannot create group", group);
+    if (!g.valid()) fail("cannot create group" + write_cause(), group);
 }
 
 void File::write_raw(const std::string& name, const std::vector<hsize_t>& dims, hid_t mem_type,
@@ -210,9 +229,9 @@ void File::write_raw(const std::string& name, const std::vector<hsize_t>& dims, 
     Handle set(H5Dcreate2(m_id, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
                           H5P_DEFAULT),
                H5Dclose);
-    if (!set.valid()) fail("cannot create dataset", name);
+    if (!set.valid()) fail("cannot create dataset" + write_cause(), name);
     if (H5Dwrite(set.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
-        fail("cannot write dataset", name);
+        fail("cannot write dataset" + write_cause(), name);
     }
 }
 
@@ -252,21 +271,50 @@ void File::write_array(const std::string& name, const std::vector<hsize_t>& dims
     write_raw(name, dims, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, data);
 }
 
+namespace {
+
+// Strings are written fixed-length: their bytes sit in the object itself. Variable-
+// length strings live in a global heap, and HDF5 1.10 loops forever reading a damaged
+// one (found by the fuzz tests); only attributes too long for an object header
+// (64 KiB) are still written variable-length. Readers accept both.
+constexpr std::size_t kMaxFixedAttributeBytes = 32 * 1024;
+
+/// A UTF-8 string's HDF5 type and the buffer to pass to H5Awrite/H5Dwrite.
+class StringValue {
+public:
+    StringValue(const std::string& s, bool fixed) : m_type(H5Tcopy(H5T_C_S1), H5Tclose), m_ptr(s.c_str())
+    {
+        if (fixed) {
+            H5Tset_size(m_type.get(), std::max<std::size_t>(s.size(), 1));  // "" as one NUL byte
+            H5Tset_strpad(m_type.get(), H5T_STR_NULLPAD);
+        } else {
+            H5Tset_size(m_type.get(), H5T_VARIABLE);
+        }
+        H5Tset_cset(m_type.get(), H5T_CSET_UTF8);
+        m_fixed = fixed;
+    }
+    hid_t type() const { return m_type.get(); }
+    const void* buffer() const { return m_fixed ? static_cast<const void*>(m_ptr) : static_cast<const void*>(&m_ptr); }
+
+private:
+    Handle m_type;
+    const char* m_ptr;
+    bool m_fixed = true;
+};
+
+} // namespace
+
 void File::write_string(const std::string& name, const std::string& s)
 {
     create_group(parent_of(name));
     if (exists(name)) H5Ldelete(m_id, name.c_str(), H5P_DEFAULT);
-    Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
-    H5Tset_size(type.get(), H5T_VARIABLE);
-    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    const StringValue value(s, /*fixed=*/true);
     Handle space(H5Screate(H5S_SCALAR), H5Sclose);
-    Handle set(H5Dcreate2(m_id, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT,
-                          H5P_DEFAULT),
+    Handle set(H5Dcreate2(m_id, name.c_str(), value.type(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
                H5Dclose);
     if (!set.valid()) fail("cannot create string dataset", name);
-    const char* ptr = s.c_str();
-    if (H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &ptr) < 0) {
-        fail("cannot write string", name);
+    if (H5Dwrite(set.get(), value.type(), H5S_ALL, H5S_ALL, H5P_DEFAULT, value.buffer()) < 0) {
+        fail("cannot write string" + write_cause(), name);
     }
 }
 
@@ -396,15 +444,11 @@ void File::set_attribute(const std::string& path, const std::string& key, const 
     Handle obj(open_object(m_id, path), H5Oclose);
     if (!obj.valid()) fail("cannot open object for attribute '" + key + "'", path);
     if (H5Aexists(obj.get(), key.c_str()) > 0) H5Adelete(obj.get(), key.c_str());
-    Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
-    H5Tset_size(type.get(), H5T_VARIABLE);
-    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    const StringValue text(value, /*fixed=*/value.size() <= kMaxFixedAttributeBytes);
     Handle space(H5Screate(H5S_SCALAR), H5Sclose);
-    Handle attr(H5Acreate2(obj.get(), key.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
-                H5Aclose);
-    const char* ptr = value.c_str();
-    if (!attr.valid() || H5Awrite(attr.get(), type.get(), &ptr) < 0) {
-        fail("cannot write attribute '" + key + "'", path);
+    Handle attr(H5Acreate2(obj.get(), key.c_str(), text.type(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+    if (!attr.valid() || H5Awrite(attr.get(), text.type(), text.buffer()) < 0) {
+        fail("cannot write attribute '" + key + "'" + write_cause(), path);
     }
 }
 
@@ -420,7 +464,7 @@ void set_scalar_attribute(hid_t file, const std::string& path, const std::string
     Handle attr(H5Acreate2(obj.get(), key.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
                 H5Aclose);
     if (!attr.valid() || H5Awrite(attr.get(), mem_type, &value) < 0) {
-        throw IoError("HDF5 file '" + f.path() + "', '" + path + "': cannot write attribute '" + key + "'");
+        throw IoError("HDF5 file '" + f.path() + "', '" + path + "': cannot write attribute '" + key + "'" + write_cause());
     }
 }
 } // namespace
@@ -520,25 +564,35 @@ std::vector<std::string> File::list(const std::string& group) const
 
 void File::flush() { H5Fflush(m_id, H5F_SCOPE_GLOBAL); }
 
-AtomicOutput::AtomicOutput(std::string final_path)
-    : m_final(std::move(final_path)), m_temp(m_final + ".tmp-" + std::to_string(::getpid()))
+void File::close()
 {
+    if (m_id < 0) return;
+    const herr_t status = H5Fclose(m_id);
+    m_id = -1;
+    if (status < 0) throw IoError("cannot finish writing HDF5 file '" + m_path + "' (disk full or I/O error)");
 }
 
-AtomicOutput::~AtomicOutput()
+void write_file_atomically(const std::string& path, const std::function<void(File&)>& fill)
 {
-    if (!m_committed) {
-        std::error_code ec;
-        std::filesystem::remove(m_temp, ec);
+    AtomicOutput out(path);
+    File f = [&] {
+        try {
+            return File::create(out.temp_path());
+        } catch (const IoError&) {
+            throw IoError("cannot create HDF5 file '" + path + "': " + create_failure_reason(path));
+        }
+    }();
+    try {
+        fill(f);
+        f.close();
+    } catch (const IoError& e) {
+        // Messages about the temporary would name a file that is about to be removed.
+        std::string what = e.what();
+        for (std::size_t at = what.find(out.temp_path()); at != std::string::npos; at = what.find(out.temp_path()))
+            what.replace(at, out.temp_path().size(), path);
+        throw IoError(what);
     }
-}
-
-void AtomicOutput::commit()
-{
-    std::error_code ec;
-    std::filesystem::rename(m_temp, m_final, ec);
-    if (ec) throw IoError("cannot move '" + m_temp + "' to '" + m_final + "': " + ec.message());
-    m_committed = true;
+    out.commit();
 }
 
 } // namespace lb::h5

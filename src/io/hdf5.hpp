@@ -4,6 +4,7 @@
 // created on demand; every failure throws lb::IoError naming file and dataset.
 #include <hdf5.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,9 @@ public:
     void create_group(const std::string& group);
 
     void flush();
+    /// Close now, checking the result: IoError naming the file if HDF5 could not write
+    /// it out (a full disk). The destructor closes unchecked (error paths only).
+    void close();
 
 private:
     File(hid_t id, std::string path);
@@ -90,23 +94,10 @@ private:
     [[noreturn]] void fail(const std::string& what, const std::string& name) const;
 };
 
-/// Writes to `<final>.tmp-<pid>` and renames onto `final` on commit(); if the
-/// object is destroyed without commit() (an exception), the temporary is removed.
-/// This keeps bad input from leaving half-written output behind.
-class AtomicOutput {
-public:
-    explicit AtomicOutput(std::string final_path);
-    ~AtomicOutput();
-    AtomicOutput(const AtomicOutput&) = delete;
-    AtomicOutput& operator=(const AtomicOutput&) = delete;
-    const std::string& temp_path() const { return m_temp; }
-    const std::string& final_path() const { return m_final; }
-    void commit();
-
-private:
-    std::string m_final;
-    std::string m_temp;
-    bool m_committed = false;
-};
+/// Write an HDF5 file atomically (io/atomic_file.hpp): `fill` writes into a temporary
+/// beside `path`, which is then closed with its result checked (a full disk shows
+/// there) and only then renamed onto `path`. On any error the temporary is removed,
+/// `path` is untouched and the IoError names `path`.
+void write_file_atomically(const std::string& path, const std::function<void(File&)>& fill);
 
 } // namespace lb::h5

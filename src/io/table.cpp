@@ -18,7 +18,7 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
-#include "io/hdf5.hpp"
+#include "io/atomic_file.hpp"
 
 #ifndef LB_BUILD_TYPE
 #define LB_BUILD_TYPE "unknown"
@@ -95,25 +95,6 @@ void check_shape(const Table& table)
                         " columns");
         }
     }
-}
-
-void write_text_atomically(const std::string& path, const std::string& text)
-{
-    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-    if (!parent.empty()) {
-        std::error_code ec;
-        std::filesystem::create_directories(parent, ec);
-        if (ec) throw IoError("cannot create directory '" + parent.string() + "' for '" + path + "': " + ec.message());
-    }
-    h5::AtomicOutput out(path);
-    {
-        std::ofstream file(out.temp_path(), std::ios::binary | std::ios::trunc);
-        if (!file) throw IoError("cannot create '" + out.temp_path() + "' (for '" + path + "'): " + std::strerror(errno));
-        file << text;
-        file.close();
-        if (!file) throw IoError("cannot write '" + out.temp_path() + "' (for '" + path + "')");
-    }
-    out.commit();
 }
 
 std::string utc_now()

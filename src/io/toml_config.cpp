@@ -87,21 +87,38 @@ double ConfigTable::require_double(const std::string& key)
     return to_double(key, *node);
 }
 
-long long ConfigTable::get_int(const std::string& key, long long fallback)
+namespace {
+
+std::string range_text(long long min, long long max)
+{
+    return "[" + std::to_string(min) + ", " + std::to_string(max) + "]";
+}
+
+} // namespace
+
+long long ConfigTable::get_int(const std::string& key, long long fallback, long long min, long long max)
 {
     const toml::node* node = find(key);
     if (!node) return fallback;
-    if (auto i = node->as_integer()) return i->get();
-    fail(key, "expected an integer");
+    auto i = node->as_integer();
+    if (!i) fail(key, "expected an integer");
+    const long long v = i->get();
+    if (v < min || v > max) fail(key, "must lie in " + range_text(min, max) + ", got " + std::to_string(v));
+    return v;
 }
 
-long long ConfigTable::require_int(const std::string& key)
+long long ConfigTable::require_int(const std::string& key, long long min, long long max)
 {
     if (!has(key)) {
         m_used.insert(key);
         fail(key, "required integer is missing");
     }
-    return get_int(key, 0);
+    return get_int(key, 0, min, max);
+}
+
+int ConfigTable::get_count(const std::string& key, int fallback, int min, int max)
+{
+    return int(get_int(key, fallback, min, max));
 }
 
 bool ConfigTable::get_bool(const std::string& key, bool fallback)
@@ -142,7 +159,8 @@ std::vector<double> ConfigTable::get_double_array(const std::string& key,
 }
 
 std::vector<long long> ConfigTable::get_int_array(const std::string& key,
-                                                  const std::vector<long long>& fallback)
+                                                  const std::vector<long long>& fallback, long long min,
+                                                  long long max)
 {
     const toml::node* node = find(key);
     if (!node) return fallback;
@@ -152,6 +170,8 @@ std::vector<long long> ConfigTable::get_int_array(const std::string& key,
     for (const toml::node& item : *arr) {
         auto i = item.as_integer();
         if (!i) fail(key, "expected an array of integers");
+        if (i->get() < min || i->get() > max)
+            fail(key, "entries must lie in " + range_text(min, max) + ", got " + std::to_string(i->get()));
         values.push_back(i->get());
     }
     return values;
@@ -208,14 +228,9 @@ std::vector<Index> ConfigTable::get_widths(const std::string& key, const std::ve
         m_used.insert(key);
         return fallback;
     }
-    const std::vector<long long> w = get_int_array(key, {});
+    const std::vector<long long> w = get_int_array(key, {}, 1, kMaxWidth);
     if (w.empty()) fail(key, "needs at least one width");
-    std::vector<Index> out;
-    for (long long v : w) {
-        if (v <= 0) fail(key, "widths must be positive");
-        out.push_back(Index(v));
-    }
-    return out;
+    return std::vector<Index>(w.begin(), w.end());
 }
 
 void ConfigTable::accept_all()

@@ -11,6 +11,7 @@
 
 #include <toml++/toml.h>
 
+#include "core/limits.hpp"
 #include "core/types.hpp"
 
 namespace lb {
@@ -26,18 +27,24 @@ public:
 
     double get_double(const std::string& key, double fallback);
     double require_double(const std::string& key);
-    long long get_int(const std::string& key, long long fallback);
-    long long require_int(const std::string& key);
+    /// Integers are range-checked: a value outside [min, max] is a ConfigError naming
+    /// the key and the range, so no option wraps when narrowed or asks for an
+    /// allocation that cannot succeed. The fallback is returned unchecked.
+    long long get_int(const std::string& key, long long fallback, long long min, long long max);
+    long long require_int(const std::string& key, long long min, long long max);
+    /// get_int narrowed to int (max must fit an int).
+    int get_count(const std::string& key, int fallback, int min, int max);
     bool get_bool(const std::string& key, bool fallback);
     std::string get_string(const std::string& key, const std::string& fallback);
     std::string require_string(const std::string& key);
     Vector3d get_vec3(const std::string& key, const Vector3d& fallback);
     Vector3d require_vec3(const std::string& key);
     std::vector<double> get_double_array(const std::string& key, const std::vector<double>& fallback);
-    std::vector<long long> get_int_array(const std::string& key, const std::vector<long long>& fallback);
+    std::vector<long long> get_int_array(const std::string& key, const std::vector<long long>& fallback,
+                                         long long min, long long max);
     std::vector<std::string> get_string_array(const std::string& key,
                                               const std::vector<std::string>& fallback);
-    /// Layer widths: a non-empty array of positive integers (fallback if absent).
+    /// Layer widths: a non-empty array of integers in [1, kMaxWidth] (fallback if absent).
     std::vector<Index> get_widths(const std::string& key, const std::vector<Index>& fallback);
 
     /// A sub-table; std::nullopt if absent.

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/limits.hpp"
 #include "core/parse.hpp"
 #include "core/log.hpp"
 #include "core/timer.hpp"
@@ -69,11 +70,15 @@ nn::Linear& linear_layer(nn::Sequential& net, Index i, const char* what)
 
 std::string hexfloat(double x) { return nn::exact_text(x); }
 
-long long require_int(const h5::File& f, const std::string& key)
+long long require_int(const h5::File& f, const std::string& key, long long min, long long max)
 {
     if (!f.has_attribute("/", key))
         throw IoError("autoencoder file '" + f.path() + "': missing attribute '" + key + "'");
-    return f.attribute_int("/", key);
+    const long long v = f.attribute_int("/", key);
+    if (v < min || v > max)
+        throw IoError("autoencoder file '" + f.path() + "': attribute '" + key + "' is " + std::to_string(v) +
+                      ", outside [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+    return v;
 }
 
 std::string require_string(const h5::File& f, const std::string& key)
@@ -85,8 +90,9 @@ std::string require_string(const h5::File& f, const std::string& key)
 
 std::vector<Index> parse_widths(const std::string& text, const std::string& where)
 {
-    const auto widths = parse_positive_list(text);
-    if (!widths) throw IoError(where + ": malformed hidden widths '" + text + "'");
+    const auto widths = parse_positive_list(text, kMaxWidth);
+    if (!widths) throw IoError(where + ": malformed hidden widths '" + text + "' (widths lie in [1, " +
+                               std::to_string(kMaxWidth) + "])");
     return *widths;
 }
 
@@ -201,9 +207,7 @@ std::string Autoencoder::content_hash()
 
 void Autoencoder::save(const std::string& path)
 {
-    h5::AtomicOutput output(path);
-    {
-        h5::File file = h5::File::create(output.temp_path());
+    h5::write_file_atomically(path, [&](h5::File& file) {
         nn::save_network(file, "encoder.", m_encoder);
         nn::save_network(file, "decoder.", m_decoder);
         file.set_attribute("/", "format", std::string(kFileFormat));
@@ -217,8 +221,7 @@ void Autoencoder::save(const std::string& path)
         file.set_attribute("/", "num_dofs", (long long)m_encoding.num_dofs());
         file.set_attribute("/", "scene", m_scene_name);
         file.set_attribute("/", "seed", std::to_string(m_seed));
-    }
-    output.commit();
+    });
 }
 
 Autoencoder Autoencoder::load(const std::string& path, const PhysicsSpec& physics)
@@ -229,11 +232,11 @@ Autoencoder Autoencoder::load(const std::string& path, const PhysicsSpec& physic
         throw IoError(where + ": not a latentbench autoencoder (attribute 'format' is not '" + kFileFormat + "')");
 
     AutoencoderOptions options;
-    options.latent_dim = static_cast<Index>(require_int(file, "latent_dim"));
-    options.pca_dim = static_cast<Index>(require_int(file, "pca_dim"));
+    options.latent_dim = static_cast<Index>(require_int(file, "latent_dim", 1, kMaxWidth));
+    options.pca_dim = static_cast<Index>(require_int(file, "pca_dim", 0, kMaxWidth));
     options.hidden = parse_widths(require_string(file, "hidden"), where);
-    options.batch_norm = require_int(file, "batch_norm") != 0;
-    options.residual = require_int(file, "residual") != 0;
+    options.batch_norm = require_int(file, "batch_norm", 0, 1) != 0;
+    options.residual = require_int(file, "residual", 0, 1) != 0;
     const std::string seed_text = file.has_attribute("/", "seed") ? file.attribute_string("/", "seed") : "0";
     const std::uint64_t seed = std::strtoull(seed_text.c_str(), nullptr, 10);
 
@@ -244,7 +247,7 @@ Autoencoder Autoencoder::load(const std::string& path, const PhysicsSpec& physic
             throw IoError(where + ": " + e.what());
         }
     }();
-    const long long F = require_int(file, "num_features");
+    const long long F = require_int(file, "num_features", 1, std::numeric_limits<int>::max());
     const std::string kind = require_string(file, "encoding");
     if (kind != ae.m_encoding.kind_name())
         throw IoError(where + ": made for the '" + kind + "' encoding, but the physics needs '" +

@@ -12,17 +12,14 @@ constexpr const char* kArtefactFormat = "latentbench.method/1";
 void fit_artefact(const Method& method, const MethodInputs& inputs, const std::string& scene_name,
                   const std::string& path, const std::string& config_text)
 {
-    h5::AtomicOutput out(path);
-    {
-        h5::File f = h5::File::create(out.temp_path());
+    h5::write_file_atomically(path, [&](h5::File& f) {
         method.fit(inputs, f);
         f.set_attribute("/", "format", std::string(kArtefactFormat));
         f.set_attribute("/", "method", method.method_name());
         f.set_attribute("/", "method_options", method.options_text());
         f.set_attribute("/", "scene", scene_name);
         f.set_attribute("/", "config", config_text);
-    }
-    out.commit();
+    });
 }
 
 bool is_artefact(const h5::File& file)

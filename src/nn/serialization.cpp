@@ -126,12 +126,9 @@ LoadedNetwork load_network(const h5::File& file, const std::string& prefix)
 
 void save_network(const std::string& path, const std::string& prefix, Sequential& net, const Standardizer* standardizer)
 {
-    h5::AtomicOutput output(path);
-    {
-        h5::File file = h5::File::create(output.temp_path());
+    h5::write_file_atomically(path, [&](h5::File& file) {
         save_network(file, prefix, net, standardizer);
-    }
-    output.commit();
+    });
 }
 
 LoadedNetwork load_network(const std::string& path, const std::string& prefix)

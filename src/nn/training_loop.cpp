@@ -29,9 +29,7 @@ struct Counters {
 void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, Learner& learner,
                       const std::vector<ParameterRef>& params, const Adam& adam, const Counters& c)
 {
-    h5::AtomicOutput out(path);
-    {
-        h5::File f = h5::File::create(out.temp_path());
+    h5::write_file_atomically(path, [&](h5::File& f) {
         f.set_attribute("/", "format", std::string(kFormat));
         write_fingerprint(f, fingerprint);
         const AdamState& s = adam.state();
@@ -47,8 +45,35 @@ void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, L
         f.set_attribute("/", "epochs_since_improvement", (long long)c.epochs_since_improvement);
         f.set_attribute("/", "last_loss", exact_text(c.last_loss));
         learner.save_state(f);
+    });
+}
+
+/// ConfigError unless `path` may be replaced by a checkpoint: it is one (of any version,
+/// or damaged: those are set aside), or an empty file. A file of another kind (a
+/// dataset, an autoencoder, a text file) given as --checkpoint by mistake is refused,
+/// never set aside or overwritten.
+void refuse_foreign_checkpoint(const std::string& path, const std::string& label)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const auto refuse = [&](const std::string& what) {
+        throw ConfigError(label + ": checkpoint '" + path + "' " + what +
+                          ", not a training checkpoint; refusing to replace it (choose another checkpoint path)");
+    };
+    if (fs::is_directory(path, ec)) refuse("is a directory");
+    if (fs::file_size(path, ec) == 0 && !ec) return;  // nothing to lose
+    if (H5Fis_hdf5(path.c_str()) <= 0) refuse("is not an HDF5 file");
+    std::string format;
+    try {
+        const h5::File f = h5::File::open(path);
+        if (!f.has_attribute("/", "format")) refuse("is an HDF5 file without a 'format' attribute (a dataset?)");
+        format = f.attribute_string("/", "format");
+    } catch (const ConfigError&) {
+        throw;
+    } catch (const Error&) {
+        return;  // an HDF5 file that cannot be read: a damaged checkpoint, set aside by the caller
     }
-    out.commit();
+    if (format.rfind("latentbench.training_checkpoint/", 0) != 0) refuse("is a '" + format + "' file");
 }
 
 /// Resume, all or nothing: the reason it cannot be resumed (nothing changed), or empty.
@@ -196,6 +221,7 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
 
     const std::string& path = o.checkpoint_path;
     if (!path.empty() && std::filesystem::exists(path)) {
+        refuse_foreign_checkpoint(path, o.label);
         const std::string reason = o.resume ? read_checkpoint(path, fingerprint, learner, params, adam, c)
                                             : "resume is off (training from scratch as asked)";
         if (reason.empty()) {

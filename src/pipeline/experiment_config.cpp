@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <filesystem>
+#include <limits>
 
 #include "eval/rollout.hpp"
 #include "io/toml_config.hpp"
@@ -22,24 +23,20 @@ std::string resolve(const std::string& path, const std::string& base)
 void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
 {
     if (t.has("latent")) {
-        o.latent_dim = Index(t.get_int("latent", 0));
+        o.latent_dim = Index(t.get_int("latent", 0, 1, kMaxWidth));
         latent_given = true;
-        if (o.latent_dim < 1) t.fail("latent", "must be at least 1");
     }
     o.hidden = t.get_widths("hidden", o.hidden);
-    o.pca_dim = Index(t.get_int("pca", o.pca_dim));
-    o.epochs = int(t.get_int("epochs", o.epochs));
-    o.batch_size = int(t.get_int("batch", o.batch_size));
+    o.pca_dim = Index(t.get_int("pca", o.pca_dim, 0, kMaxWidth));
+    o.epochs = t.get_count("epochs", o.epochs, 1, kMaxEpochs);
+    o.batch_size = t.get_count("batch", o.batch_size, 2, kMaxBatch);
     o.learning_rate = t.get_double("learning_rate", o.learning_rate);
-    o.patience = int(t.get_int("patience", o.patience));
+    o.patience = t.get_count("patience", o.patience, 0, kMaxEpochs);
     o.validation_fraction = t.get_double("validation", o.validation_fraction);
     o.batch_norm = t.get_bool("batch_norm", o.batch_norm);
     o.residual = t.get_bool("residual", o.residual);
-    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed));
-    if (o.epochs < 1) t.fail("epochs", "must be at least 1");
-    if (o.batch_size < 2) t.fail("batch", "must be at least 2 (BatchNorm)");
+    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");
-    if (o.pca_dim < 0) t.fail("pca", "must be non-negative");
     if (!(o.validation_fraction > 0.0 && o.validation_fraction < 1.0)) t.fail("validation", "must lie in (0, 1)");
     t.finish();
 }
@@ -140,7 +137,7 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
     if (!is_safe_name(ex.name)) cfg.fail("name", std::string(kSafeNameRule) + " (got '" + ex.name + "')");
     ex.description = cfg.get_string("description", "");
     ex.output_dir = cfg.get_string("output_dir", "runs/" + ex.name);
-    ex.threads = int(cfg.get_int("threads", 0));
+    ex.threads = cfg.get_count("threads", 0, 0, kMaxThreads);
 
     AutoencoderOptions ae_defaults;
     bool latent_default_given = false;
@@ -156,7 +153,8 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
 
     if (auto t = cfg.table("evaluation")) {
         ex.sequences = t->get_string("sequences", ex.sequences);
-        const long long frames = t->get_int("frames", 0);  // range-checked before narrowing to int
+        const long long frames = t->get_int("frames", 0, std::numeric_limits<long long>::min(),
+                                            std::numeric_limits<long long>::max());  // rollout_frames_problem checks
         const std::string problem = rollout_frames_problem(frames);
         if (!problem.empty()) t->fail("frames", problem);
         ex.rollout_frames = int(frames);

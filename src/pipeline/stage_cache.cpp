@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/timer.hpp"
+#include "io/atomic_file.hpp"
 #include "io/hdf5.hpp"
 #include "pipeline/experiment.hpp"
 
@@ -23,15 +24,20 @@ std::string read_key(const std::string& file)
     return key;
 }
 
-void write_key(const std::string& file, const std::string& key)
+void write_key(const std::string& file, const std::string& key) { write_text_atomically(file + ".key", key + "\n"); }
+
+/// A cached HDF5 output must still open (a truncated or damaged file does not): a key
+/// never stands for an unreadable file. Such a stage runs again.
+bool readable(const std::string& file)
 {
-    h5::AtomicOutput out(file + ".key");
-    {
-        std::ofstream s(out.temp_path());
-        s << key << "\n";
-        if (!s.flush()) throw IoError("cannot write '" + out.temp_path() + "' (disk full?)");
+    if (fs::path(file).extension() != ".h5") return true;
+    try {
+        h5::File::open(file);
+        return true;
+    } catch (const Error& e) {
+        log_warn("cached %s cannot be read (%s); running its stage again", file.c_str(), e.what());
+        return false;
     }
-    out.commit();
 }
 
 } // namespace
@@ -53,7 +59,7 @@ bool StageCache::forced(const std::string& stage) const { return m_forced.count(
 void StageCache::run(const std::string& stage, const std::string& what, const std::string& file,
                      const std::string& key, const std::function<void()>& work)
 {
-    if (!forced(stage) && fs::exists(file) && read_key(file) == key) {
+    if (!forced(stage) && fs::exists(file) && read_key(file) == key && readable(file)) {
         log_info("[%s] %s: cached (%s)", stage.c_str(), what.c_str(), file.c_str());
         ++m_cached;
         return;

@@ -40,15 +40,29 @@ std::string resolve_path(const std::string& path, const std::string& base_dir)
     return (fs::path(LB_SOURCE_DIR) / path).string();
 }
 
+// Limits on generated meshes and sequences: beyond them a scene could not be simulated
+// on one machine anyway, and checking first gives a message instead of bad_alloc.
+constexpr int kMaxGridAxis = 100'000;
+constexpr int kMaxVertices = 2'000'000;
+constexpr int kMaxSceneFrames = 10'000'000;
+
+void check_vertex_count(const ConfigTable& cfg, const std::string& key, double vertices)
+{
+    if (vertices > kMaxVertices)
+        cfg.fail(key, "the generated mesh would have " + std::to_string((long long)vertices) + " vertices; at most " +
+                          std::to_string(kMaxVertices) + " are supported");
+}
+
 Mesh build_mesh(ConfigTable cfg, const std::string& base_dir)
 {
     const std::string generator = cfg.require_string("generator");
     Mesh mesh;
     if (generator == "rod_bundle") {
         RodBundleOptions o;
-        o.num_rods_x = int(cfg.get_int("rods_x", o.num_rods_x));
-        o.num_rods_y = int(cfg.get_int("rods_y", o.num_rods_y));
-        o.vertices_per_rod = int(cfg.get_int("vertices_per_rod", o.vertices_per_rod));
+        o.num_rods_x = cfg.get_count("rods_x", o.num_rods_x, 1, kMaxGridAxis);
+        o.num_rods_y = cfg.get_count("rods_y", o.num_rods_y, 1, kMaxGridAxis);
+        o.vertices_per_rod = cfg.get_count("vertices_per_rod", o.vertices_per_rod, 3, kMaxGridAxis);
+        check_vertex_count(cfg, "rods_x", double(o.num_rods_x) * o.num_rods_y * o.vertices_per_rod);
         o.length = cfg.get_double("length", o.length);
         o.spacing = cfg.get_double("spacing", o.spacing);
         if (o.num_rods_x < 1 || o.num_rods_y < 1) cfg.fail("rods_x", "need at least one rod");
@@ -57,8 +71,9 @@ Mesh build_mesh(ConfigTable cfg, const std::string& base_dir)
         mesh = make_rod_bundle(o);
     } else if (generator == "cloth_grid") {
         ClothGridOptions o;
-        o.nx = int(cfg.get_int("nx", o.nx));
-        o.ny = int(cfg.get_int("ny", o.ny));
+        o.nx = cfg.get_count("nx", o.nx, 2, kMaxGridAxis);
+        o.ny = cfg.get_count("ny", o.ny, 2, kMaxGridAxis);
+        check_vertex_count(cfg, "nx", double(o.nx) * o.ny);
         o.width = cfg.get_double("width", o.width);
         o.height = cfg.get_double("height", o.height);
         if (o.nx < 2 || o.ny < 2) cfg.fail("nx", "a cloth grid needs at least 2×2 vertices");
@@ -66,9 +81,10 @@ Mesh build_mesh(ConfigTable cfg, const std::string& base_dir)
         mesh = make_cloth_grid(o);
     } else if (generator == "tet_beam") {
         TetBeamOptions o;
-        o.nx = int(cfg.get_int("nx", o.nx));
-        o.ny = int(cfg.get_int("ny", o.ny));
-        o.nz = int(cfg.get_int("nz", o.nz));
+        o.nx = cfg.get_count("nx", o.nx, 1, kMaxGridAxis);
+        o.ny = cfg.get_count("ny", o.ny, 1, kMaxGridAxis);
+        o.nz = cfg.get_count("nz", o.nz, 1, kMaxGridAxis);
+        check_vertex_count(cfg, "nx", double(o.nx + 1) * (o.ny + 1) * (o.nz + 1));
         o.size = cfg.get_vec3("size", o.size);
         if (o.nx < 1 || o.ny < 1 || o.nz < 1) cfg.fail("nx", "need at least one cell per axis");
         if ((o.size.array() <= 0.0).any()) cfg.fail("size", "must be positive");
@@ -101,7 +117,7 @@ std::vector<int> select_dirichlet(ConfigTable cfg, const Mesh& mesh)
         if (mesh.kind != MeshKind::Rods) cfg.fail("rod_roots", "only valid for rod meshes");
         for (const auto& rod : mesh.rods) selected.insert(rod.front());
     }
-    for (long long i : cfg.get_int_array("indices", {})) {
+    for (long long i : cfg.get_int_array("indices", {}, 0, kMaxVertices)) {
         if (i < 0 || i >= mesh.num_vertices()) {
             cfg.fail("indices", "vertex " + std::to_string(i) + " out of range [0, " +
                                     std::to_string(mesh.num_vertices()) + ")");
@@ -135,20 +151,17 @@ SequenceSpec read_sequence(ConfigTable cfg, int index)
 {
     SequenceSpec seq;
     seq.name = cfg.get_string("name", "seq" + std::to_string(index));
-    seq.frames = int(cfg.require_int("frames"));
-    if (seq.frames < 3) cfg.fail("frames", "need at least 3 frames");
-    seq.train_frames = int(cfg.get_int("train_frames", 0));
-    if (seq.train_frames < 0 || seq.train_frames > seq.frames) {
+    seq.frames = int(cfg.require_int("frames", 3, kMaxSceneFrames));
+    seq.train_frames = cfg.get_count("train_frames", 0, 0, kMaxSceneFrames);
+    if (seq.train_frames > seq.frames) {
         cfg.fail("train_frames", "must lie in [0, frames]");
     }
     for (ConfigTable s : cfg.table_array("segments")) {
         MotionSegment m;
-        m.frames = int(s.require_int("frames"));
-        if (m.frames < 1) s.fail("frames", "must be at least 1");
+        m.frames = int(s.require_int("frames", 1, kMaxSceneFrames));
         m.velocity = s.get_vec3("velocity", Vector3d::Zero());
         m.angular_velocity = s.get_vec3("angular_velocity", Vector3d::Zero());
-        m.flip_every = int(s.get_int("flip_every", 0));
-        if (m.flip_every < 0) s.fail("flip_every", "must be non-negative");
+        m.flip_every = s.get_count("flip_every", 0, 0, kMaxSceneFrames);
         s.finish();
         seq.segments.push_back(m);
     }
@@ -280,9 +293,8 @@ Scene load_scene_from_string(const std::string& text, const std::string& source,
     if (auto solver = cfg.table("solver")) {
         scene.newton.gradient_tolerance = solver->get_double("gradient_tolerance", scene.newton.gradient_tolerance);
         scene.newton.step_tolerance = solver->get_double("step_tolerance", scene.newton.step_tolerance);
-        scene.newton.max_iterations = int(solver->get_int("max_iterations", scene.newton.max_iterations));
+        scene.newton.max_iterations = solver->get_count("max_iterations", scene.newton.max_iterations, 1, 1'000'000);
         if (scene.newton.gradient_tolerance <= 0.0) solver->fail("gradient_tolerance", "must be positive");
-        if (scene.newton.max_iterations < 1) solver->fail("max_iterations", "must be at least 1");
         solver->finish();
     }
 

@@ -106,9 +106,7 @@ void write_frames(h5::File& f, const std::string& name, const MatrixXd& m)
 
 void save_dataset(const Dataset& data, const std::string& path)
 {
-    h5::AtomicOutput out(path);
-    {
-        h5::File f = h5::File::create(out.temp_path());
+    h5::write_file_atomically(path, [&](h5::File& f) {
         const PhysicsSpec& p = data.physics;
         f.write("rest_positions", MatrixXd(p.mesh.rest_positions));
         f.write("elements", p.mesh.elements);
@@ -144,8 +142,7 @@ void save_dataset(const Dataset& data, const std::string& path)
             f.set_attribute(g, "name", s.name);
             f.set_attribute(g, "train_frames", (long long)s.train_frames);
         }
-    }
-    out.commit();
+    });
 }
 
 namespace {

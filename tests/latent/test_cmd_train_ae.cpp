@@ -62,7 +62,7 @@ TEST(TrainAeCli, BadInputFailsCleanly)
     const std::vector<Case> cases = {
         {"train-ae " + dir + "/missing.h5 -o " + out, "missing.h5"},
         {"train-ae " + data + " -o " + out + " --hidden 16,0", "--hidden"},
-        {"train-ae " + data + " -o " + out + " --batch 1", "batch_size"},
+        {"train-ae " + data + " -o " + out + " --batch 1", "--batch"},
         {"train-ae " + data + " -o " + out + " --lr -1", "learning_rate"},
     };
     for (const auto& c : cases) {

@@ -145,15 +145,10 @@ TEST(Serialization, NumpyReferenceScriptAgrees)
     const Standardizer st = Standardizer::fit(test::random_matrix(21, 40, rng, -3, 5));
     Sequential dec = trained_decoder(rng);
     const std::string model = tmp_path("reference_model.h5");
-    {
-        h5::AtomicOutput out(model);
-        {
-            h5::File f = h5::File::create(out.temp_path());
-            save_network(f, "encoder.", enc, &st);
-            save_network(f, "decoder.", dec);
-        }
-        out.commit();
-    }
+    h5::write_file_atomically(model, [&](h5::File& f) {
+        save_network(f, "encoder.", enc, &st);
+        save_network(f, "decoder.", dec);
+    });
     const MatrixXd X = test::random_matrix(21, 7, rng, -3, 5);
     const std::string inputs = tmp_path("reference_inputs.h5");
     {

@@ -17,14 +17,14 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
         o.hidden = t.get_widths("hidden", o.hidden);
         hidden_given = true;
     }
-    o.epochs = int(t.get_int("epochs", o.epochs));
-    o.batch_size = int(t.get_int("batch", o.batch_size));
+    o.epochs = t.get_count("epochs", o.epochs, 0, kMaxEpochs);
+    o.batch_size = t.get_count("batch", o.batch_size, 1, kMaxBatch);
     o.learning_rate = t.get_double("learning_rate", o.learning_rate);
     o.max_seconds = t.get_double("max_seconds", o.max_seconds);
     o.noise_fraction = t.get_double("noise_fraction", o.noise_fraction);
     o.balancing_floor = t.get_double("balancing_floor", o.balancing_floor);
     o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
-    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed));
+    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (o.epochs < 1) t.fail("epochs", "must be at least 1");
     if (o.batch_size < 1) t.fail("batch", "must be at least 1");
     if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");

@@ -1,0 +1,15 @@
+#pragma once
+// Upper limits of integer options, shared by the TOML readers, the file readers and
+// the command line. Beyond them a value is a typo or would not fit in memory; it is
+// refused with a message naming the option before anything is allocated.
+#include <limits>
+
+namespace lb {
+
+inline constexpr int kMaxWidth = 8192;  ///< layer widths, latent and PCA dimensions
+inline constexpr int kMaxEpochs = 10'000'000;
+inline constexpr int kMaxBatch = 10'000'000;
+inline constexpr int kMaxThreads = 1024;
+inline constexpr long long kMaxSeed = std::numeric_limits<long long>::max();  ///< seeds are ≥ 0
+
+} // namespace lb
