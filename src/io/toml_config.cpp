@@ -16,6 +16,7 @@ ConfigTable::ConfigTable(const toml::table& table, std::string path, std::string
 
 std::string ConfigTable::key_path(const std::string& key) const
 {
+    if (key.empty()) return m_path;  // the table itself
     return m_path.empty() ? key : m_path + "." + key;
 }
 

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/timer.hpp"
 #include "nn/adam.hpp"
@@ -95,17 +96,31 @@ std::string read_checkpoint(const std::string& path, const Fingerprint& fingerpr
             values.push_back(f.read_matrix("param/" + p.name));
             s.m.push_back(f.read_matrix("adam/m/" + p.name));
             s.v.push_back(f.read_matrix("adam/v/" + p.name));
+            for (const MatrixXd* m : {&values.back(), &s.m.back(), &s.v.back()}) {
+                if (!m->allFinite())
+                    return "it holds non-finite values (NaN or inf) in the parameters or Adam state of '" + p.name + "'";
+            }
             require_shape(p.name, values.back(), p.value.rows(), p.value.cols());
             require_shape("adam/m/" + p.name, s.m.back(), p.value.rows(), p.value.cols());
             require_shape("adam/v/" + p.name, s.v.back(), p.value.rows(), p.value.cols());
         }
-        s.step = f.attribute_int("/", "adam_step");
+        const long long step = f.attribute_int("/", "adam_step");
+        const long long epoch = f.attribute_int("/", "epoch");
+        const long long best_epoch = f.attribute_int("/", "best_epoch");
+        const long long since = f.attribute_int("/", "epochs_since_improvement");
+        if (epoch < 0 || epoch > kMaxEpochs || best_epoch < 0 || best_epoch > epoch || since < 0 || since > epoch ||
+            step < 0)
+            return "its counters are inconsistent (epoch " + std::to_string(epoch) + ", best epoch " +
+                   std::to_string(best_epoch) + ", Adam step " + std::to_string(step) + ")";
+        s.step = step;
         Counters t;
-        t.epoch = int(f.attribute_int("/", "epoch"));
-        t.best_epoch = int(f.attribute_int("/", "best_epoch"));
+        t.epoch = int(epoch);
+        t.best_epoch = int(best_epoch);
         t.best_validation = std::strtod(f.attribute_string("/", "best_validation").c_str(), nullptr);
-        t.epochs_since_improvement = int(f.attribute_int("/", "epochs_since_improvement"));
+        t.epochs_since_improvement = int(since);
         t.last_loss = std::strtod(f.attribute_string("/", "last_loss").c_str(), nullptr);
+        if (std::isnan(t.best_validation) || !std::isfinite(t.last_loss))
+            return "its loss record is not finite";
         learner.load_state(f);  // all or nothing; below nothing can fail (shapes checked)
         adam.set_state(std::move(s));
         for (std::size_t i = 0; i < params.size(); ++i) params[i].value = values[i];

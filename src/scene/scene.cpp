@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <tuple>
 #include <set>
 
 #include "core/error.hpp"
@@ -90,15 +91,15 @@ Mesh build_mesh(ConfigTable cfg, const std::string& base_dir)
         if ((o.size.array() <= 0.0).any()) cfg.fail("size", "must be positive");
         mesh = make_tet_beam(o);
     } else if (generator == "tetgen") {
-        const std::string node = resolve_path(cfg.require_string("node"), base_dir);
-        const std::string ele = resolve_path(cfg.require_string("ele"), base_dir);
-        if (!fs::exists(node)) {
-            throw IoError(cfg.source() + ": mesh file '" + node + "' (key '" + cfg.key_path("node") +
-                          "') does not exist; run scripts/prepare_meshes to build it");
-        }
-        if (!fs::exists(ele)) {
-            throw IoError(cfg.source() + ": mesh file '" + ele + "' (key '" + cfg.key_path("ele") +
-                          "') does not exist; run scripts/prepare_meshes to build it");
+        const std::string node_written = cfg.require_string("node"), ele_written = cfg.require_string("ele");
+        const std::string node = resolve_path(node_written, base_dir);
+        const std::string ele = resolve_path(ele_written, base_dir);
+        for (const auto& [key, written, resolved] : {std::tuple{"node", node_written, node}, {"ele", ele_written, ele}}) {
+            if (!fs::exists(resolved)) {
+                throw IoError(cfg.source() + ": key '" + cfg.key_path(key) + "': mesh file '" + written +
+                              "' does not exist (looked for '" + resolved +
+                              "'); run scripts/prepare_meshes to build it");
+            }
         }
         mesh = read_tetgen(node, ele);
     } else {
@@ -243,6 +244,7 @@ Scene load_scene_from_string(const std::string& text, const std::string& source,
     Scene scene;
     scene.variant = options.variant;
     scene.resolved_toml = to_toml_string(resolved);
+    scene.source = source;
     scene.name = cfg.require_string("name");
     scene.description = cfg.get_string("description", "");
     const std::string object = cfg.require_string("object");

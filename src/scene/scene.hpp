@@ -49,6 +49,7 @@ struct Scene {
     std::string description;
     std::string variant;       ///< "" for the full-size scene
     std::string resolved_toml; ///< the merged, validated configuration text
+    std::string source;        ///< the file it was read from (for messages)
     Mesh mesh;
     Material material;
     double dt = 1.0 / 30.0;

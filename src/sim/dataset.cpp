@@ -65,14 +65,15 @@ Dataset simulate_scene(const Scene& scene, const SimulateOptions& options)
             seq.newton.row(t) << summary.iterations, summary.residual, summary.seconds;
             total_iterations += summary.iterations;
             if (!summary.converged()) {
-                const std::string msg = "scene '" + scene.name + "', sequence '" + spec.name + "', frame " +
-                                        std::to_string(t) + ": Newton did not converge: " + summary.brief();
+                const std::string msg = scene.source + ": scene '" + scene.name + "', sequence '" + spec.name +
+                                        "', frame " + std::to_string(t) +
+                                        ": Newton did not converge: " + summary.brief();
                 if (options.fail_on_nonconvergence) throw NumericalError(msg);
                 log_warn("%s", msg.c_str());
             }
             if (!x.allFinite()) {
-                throw NumericalError("scene '" + scene.name + "', sequence '" + spec.name + "', frame " +
-                                     std::to_string(t) + ": non-finite state");
+                throw NumericalError(scene.source + ": scene '" + scene.name + "', sequence '" + spec.name +
+                                     "', frame " + std::to_string(t) + ": non-finite state");
             }
             seq.positions.row(t) = x.transpose();
             x_prev2.swap(x_prev);
