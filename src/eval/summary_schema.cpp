@@ -16,17 +16,50 @@ namespace {
 constexpr SummaryAggregation kMean = SummaryAggregation::Mean;
 constexpr SummaryAggregation kMax = SummaryAggregation::Max;
 constexpr SummaryAggregation kMin = SummaryAggregation::Min;
+constexpr SummaryAggregation kSum = SummaryAggregation::Sum;
 
-constexpr SummaryMetric::Table sig(int digits) { return {true, digits, nullptr}; }
-constexpr SummaryMetric::Table cell(SummaryCellFn fn) { return {true, 0, fn}; }
-constexpr SummaryMetric::Table hidden() { return {false, 0, nullptr}; }
+constexpr SummaryMetric::Table sig(int digits) { return {true, digits, nullptr, false}; }
+constexpr SummaryMetric::Table error(int digits) { return {true, digits, nullptr, true}; }
+constexpr SummaryMetric::Table cell(SummaryCellFn fn) { return {true, 0, fn, false}; }
+constexpr SummaryMetric::Table hidden() { return {false, 0, nullptr, false}; }
 constexpr SummaryMetric::Cli cli(const char* header, int width, const char* format) { return {header, width, format}; }
 constexpr SummaryMetric::Cli no_cli() { return {nullptr, 0, ""}; }
 
-/// "stable / frames" as text, the horizon as the sort value.
-TableCell horizon_cell(const RolloutSummary& s, const SummaryMetric&)
+const SummaryWindow& window_of(const RolloutSummary& s, SummaryScope scope)
 {
-    return TableCell(std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames), double(s.stable_horizon));
+    return scope == SummaryScope::Train ? s.train : s.test;
+}
+
+/// The stable (blow-up) horizon: "T / T" if never, "diverged @h" otherwise; sorts by h.
+TableCell stable_cell(const RolloutSummary& s, const SummaryMetric&)
+{
+    const std::string text = s.stable_horizon < s.frames ? "diverged @" + std::to_string(s.stable_horizon)
+                                                         : std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames);
+    return TableCell(text, double(s.stable_horizon));
+}
+
+/// A looser tier's horizon: "@h", or "never" (sorts as the frame count).
+TableCell tier_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    const int h = int(m.get(s));
+    return TableCell(h < s.frames ? "@" + std::to_string(h) : "never", double(h));
+}
+
+/// Frames the errors of a window were aggregated over: "a of w".
+TableCell evaluated_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    const SummaryWindow& w = window_of(s, m.scope);
+    if (w.window_frames == 0) return TableCell::missing("— (empty)");
+    return TableCell(std::to_string(w.evaluated_frames) + " of " + std::to_string(w.window_frames),
+                     double(w.evaluated_frames));
+}
+
+/// A fraction as a percentage with one decimal.
+TableCell percent_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    if (window_of(s, m.scope).window_frames == 0) return TableCell::missing("— (empty)");
+    const double v = m.get(s);
+    return std::isfinite(v) ? TableCell::fixed(100.0 * v, 1) : TableCell::missing("nan");
 }
 
 TableCell significant_cell(double v, int digits)
@@ -34,17 +67,43 @@ TableCell significant_cell(double v, int digits)
     return std::isfinite(v) ? TableCell::significant(v, digits) : TableCell::missing("nan");
 }
 
+/// An error of a window, aggregated before the stable horizon: never a bare number
+/// when the rollout blew up before the end of the window.
+TableCell error_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    const SummaryWindow& w = window_of(s, m.scope);
+    if (w.window_frames == 0) return TableCell::missing("— (empty)");
+    const std::string diverged = "diverged @" + std::to_string(s.stable_horizon);
+    const double v = m.get(s);
+    if (w.evaluated_frames == 0) return TableCell::missing(diverged);
+    TableCell c = significant_cell(v, m.table.digits);
+    if (!std::isfinite(v)) c = TableCell::missing("n/a");  // e.g. a KE ratio without ground-truth motion
+    if (w.evaluated_frames < w.window_frames) c.text += " (" + diverged + ")";
+    return c;
+}
+
+#define LB_SCHEMA_ENTRY(scope_id, prefix, member, type, field, title, unit, agg, table, cli)                              \
+    metrics.push_back(SummaryMetric{prefix #field, #field, scope_id, title, unit, agg, std::is_integral_v<type>, table, \
+                                    cli, [](const RolloutSummary& s) { return double(s member field); },              \
+                                    [](RolloutSummary& s, double v) { s member field = static_cast<type>(v); }});
+#define LB_SCHEMA_rollout(type, field, title, unit, agg, table, cli) \
+    LB_SCHEMA_ENTRY(SummaryScope::Rollout, "", ., type, field, title, unit, agg, table, cli)
+#define LB_SCHEMA_window(type, field, title, unit, agg, table, cli)                                      \
+    LB_SCHEMA_ENTRY(SummaryScope::Train, "train_", .train., type, field, title, unit, agg, table, cli) \
+    LB_SCHEMA_ENTRY(SummaryScope::Test, "test_", .test., type, field, title, unit, agg, table, cli)
+#define LB_SCHEMA_LINE(scope, ...) LB_SCHEMA_##scope(__VA_ARGS__)
+
 std::vector<SummaryMetric> make_summary_metrics()
 {
     std::vector<SummaryMetric> metrics;
-#define LB_SUMMARY_ENTRY(type, field, title, unit, agg, table, cli)                                             \
-    metrics.push_back(SummaryMetric{#field, title, unit, agg, std::is_integral_v<type>, table, cli,              \
-                                    [](const RolloutSummary& s) { return double(s.field); },                    \
-                                    [](RolloutSummary& s, double v) { s.field = static_cast<type>(v); }});
-    LB_SUMMARY_METRICS(LB_SUMMARY_ENTRY)
-#undef LB_SUMMARY_ENTRY
+    LB_SUMMARY_METRICS(LB_SCHEMA_LINE)
     return metrics;
 }
+
+#undef LB_SCHEMA_LINE
+#undef LB_SCHEMA_window
+#undef LB_SCHEMA_rollout
+#undef LB_SCHEMA_ENTRY
 
 /// snprintf into a std::string of the right length (no truncation of long names).
 template <class... Args>
@@ -70,21 +129,39 @@ const std::vector<SummaryMetric>& summary_metrics()
     return metrics;
 }
 
+const char* to_string(SummaryScope scope)
+{
+    switch (scope) {
+    case SummaryScope::Rollout: return "rollout";
+    case SummaryScope::Train: return "train";
+    case SummaryScope::Test: return "test";
+    }
+    return "?";
+}
+
 RolloutSummary aggregate(const std::vector<RolloutSummary>& all)
 {
     RolloutSummary out;
     if (all.empty()) return out;
-    const double n = double(all.size());
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const SummaryMetric& m : summary_metrics()) {
-        double acc = m.aggregation == SummaryAggregation::Min ? m.get(all.front()) : 0.0;
+        double acc = 0.0;
+        int finite = 0;
         for (const RolloutSummary& s : all) {
             const double v = m.get(s);
             switch (m.aggregation) {
-            case SummaryAggregation::Mean: acc += v / n; break;
-            case SummaryAggregation::Max: acc = std::max(acc, v); break;
-            case SummaryAggregation::Min: acc = std::min(acc, v); break;
+            case SummaryAggregation::Mean:
+            case SummaryAggregation::Max:
+                if (!std::isfinite(v)) break;
+                acc = finite == 0 ? v : m.aggregation == SummaryAggregation::Max ? std::max(acc, v) : acc + v;
+                ++finite;
+                break;
+            case SummaryAggregation::Min: acc = &s == &all.front() ? v : std::min(acc, v); break;
+            case SummaryAggregation::Sum: acc += v; break;
             }
         }
+        if (m.aggregation == SummaryAggregation::Mean) acc = finite > 0 ? acc / double(finite) : nan;
+        if (m.aggregation == SummaryAggregation::Max && finite == 0) acc = nan;
         m.set(out, acc);
     }
     return out;
@@ -121,35 +198,45 @@ std::vector<std::string> summary_table_columns()
 {
     std::vector<std::string> columns;
     for (const SummaryMetric& m : summary_metrics()) {
-        if (m.table.shown) columns.emplace_back(m.title);
+        if (m.table.shown && m.scope != SummaryScope::Test) columns.emplace_back(m.title);
     }
     return columns;
 }
 
-std::vector<TableCell> summary_table_cells(const RolloutSummary& s)
+std::vector<TableCell> summary_table_cells(const RolloutSummary& s, SummaryScope window)
 {
     std::vector<TableCell> cells;
     for (const SummaryMetric& m : summary_metrics()) {
-        if (!m.table.shown) continue;
-        cells.push_back(m.table.cell ? m.table.cell(s, m) : significant_cell(m.get(s), m.table.digits));
+        if (!m.table.shown || (m.scope != SummaryScope::Rollout && m.scope != window)) continue;
+        cells.push_back(m.table.cell    ? m.table.cell(s, m)
+                        : m.table.error ? error_cell(s, m)
+                                        : significant_cell(m.get(s), m.table.digits));
     }
     return cells;
 }
 
+std::string window_label(const RolloutSummary& s, SummaryScope window)
+{
+    const int split = std::max(s.train_frames, 2);
+    if (window == SummaryScope::Test) return "test (frames >= " + std::to_string(split) + ")";
+    return split > 2 ? "train (frames 2-" + std::to_string(split - 1) + ")" : "train (none)";
+}
+
 std::string format_summary_header()
 {
-    std::string line = printf_string("%-18s %-22s", "method", "sequence");
+    std::string line = printf_string("%-18s %-22s %-6s", "method", "sequence", "window");
     for (const SummaryMetric& m : summary_metrics()) {
-        if (m.cli.header) line += printf_string(" %*s", m.cli.width, m.cli.header);
+        if (m.cli.header && m.scope != SummaryScope::Test) line += printf_string(" %*s", m.cli.width, m.cli.header);
     }
     return line;
 }
 
-std::string format_summary_row(const std::string& method, const std::string& sequence, const RolloutSummary& s)
+std::string format_summary_row(const std::string& method, const std::string& sequence, const RolloutSummary& s,
+                               SummaryScope window)
 {
-    std::string line = printf_string("%-18s %-22s", method.c_str(), sequence.c_str());
+    std::string line = printf_string("%-18s %-22s %-6s", method.c_str(), sequence.c_str(), to_string(window));
     for (const SummaryMetric& m : summary_metrics()) {
-        if (m.cli.header) line += " " + cli_value(m, s);
+        if (m.cli.header && (m.scope == SummaryScope::Rollout || m.scope == window)) line += " " + cli_value(m, s);
     }
     return line;
 }

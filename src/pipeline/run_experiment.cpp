@@ -176,7 +176,8 @@ private:
         mr.layers = method.layers();
         mr.paper_method = method.is_paper_method();
         mr.rollout_file = m_dir + "/rollouts/" + name + ".h5";
-        const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames));
+        const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames) +
+                                              "|format " + std::to_string(kRolloutFormatVersion));
         m_cache.run("rollouts", m_spec.label + ": rollout '" + name + "'", mr.rollout_file, rkey, [&] {
             std::unique_ptr<Integrator> integrator;
             if (method.has_artefact()) {

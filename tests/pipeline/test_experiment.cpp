@@ -141,6 +141,9 @@ TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
         const std::string table((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         EXPECT_NE(table.find("| pca "), std::string::npos) << table;
         EXPECT_NE(table.find("linear PCA, d = 4"), std::string::npos) << table;
+        // Training and test windows apart (issue 10).
+        EXPECT_NE(table.find("| train (frames 2-"), std::string::npos) << table;
+        EXPECT_NE(table.find("| test (frames >= "), std::string::npos) << table;
     }
 
     const RunResult second = run_experiment(ex, options);

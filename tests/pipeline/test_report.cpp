@@ -1,0 +1,111 @@
+// The comparison tables (issue 10): one row per method and window, diverged rows
+// that never show a 0, and captions that say how sequences were combined.
+#include "lb_paths.hpp"
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+
+#include "eval/metrics.hpp"
+#include "pipeline/report.hpp"
+
+namespace lb {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+std::string read_all(const std::string& path)
+{
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// A 60-frame rollout trained on 30 frames, RMSE 0.01, non-finite from `stop` (0: never).
+RolloutSummary rollout_summary(Index stop)
+{
+    MatrixXd m = MatrixXd::Zero(60, kNumMetricColumns);
+    for (Index t = 0; t < m.rows(); ++t) {
+        m(t, kRmse) = 0.01;
+        m(t, kBcViolation) = 2e-3;
+        m(t, kKineticFree) = 0.5;
+        m(t, kKineticFreeGt) = 1.0;
+        m(t, kResidual) = 0.2;
+        m(t, kStedSpatial) = 0.01;
+        m(t, kIntegrateSeconds) = m(t, kDecodeSeconds) = 1e-4;
+    }
+    if (stop > 0) m.bottomRows(m.rows() - stop).setConstant(kNan);
+    return summarize(m, 1.0, 30);
+}
+
+SceneResult scene_with(std::vector<MethodResult> methods)
+{
+    SceneResult r;
+    r.label = "cloth_small";
+    r.scene_name = "cloth";
+    r.dofs = 300;
+    r.latent = 4;
+    r.train_frames = 30;
+    r.methods = std::move(methods);
+    return r;
+}
+
+/// The Markdown table rows (lines starting with '|' after the header separator).
+std::vector<std::string> body_rows(const std::string& markdown)
+{
+    std::vector<std::string> rows;
+    size_t pos = markdown.find("|---");
+    if (pos == std::string::npos) pos = markdown.find("| ---");
+    pos = markdown.find('\n', pos);
+    while (pos != std::string::npos && pos + 1 < markdown.size() && markdown[pos + 1] == '|') {
+        const size_t end = markdown.find('\n', pos + 1);
+        rows.push_back(markdown.substr(pos + 1, end - pos - 1));
+        pos = end;
+    }
+    return rows;
+}
+
+TEST(Report, DivergedRowsReadAsDivergedAndWindowsAreApart)
+{
+    MethodResult good{"ours", "latent_mlp", "self_supervised", "", true, "", {rollout_summary(0)}};
+    MethodResult bad{"sup", "latent_mlp", "supervised_l2", "", false, "", {rollout_summary(20)}};
+    ExperimentConfig ex;
+    ex.paper_tables = false;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_diverged";
+    std::filesystem::remove_all(dir);
+    const std::vector<std::string> written = write_tables(ex, {scene_with({good, bad})}, dir);
+    ASSERT_EQ(written.size(), 1u);
+    const std::string md = read_all(written[0]);
+    const std::vector<std::string> rows = body_rows(md);
+    ASSERT_EQ(rows.size(), 4u) << md;  // two methods × two windows
+    EXPECT_NE(rows[0].find("train (frames 2-29)"), std::string::npos) << rows[0];
+    EXPECT_NE(rows[1].find("test (frames >= 30)"), std::string::npos) << rows[1];
+    // The diverged method: its training window cut at 20, its test window all "diverged".
+    EXPECT_NE(rows[2].find("(diverged @20)"), std::string::npos) << rows[2];
+    EXPECT_NE(rows[3].find("diverged @20"), std::string::npos) << rows[3];
+    for (const std::string& row : {rows[2], rows[3]}) {
+        EXPECT_EQ(row.find("| 0 |"), std::string::npos) << "a diverged row shows a 0: " << row;
+    }
+    EXPECT_NE(md.find("One test sequence per row"), std::string::npos);
+}
+
+TEST(Report, CaptionStatesHowSequencesAreCombined)
+{
+    // Before issue 10, multi-sequence rows mixed the worst-case horizon with mean errors
+    // without saying so.
+    MethodResult two{"ours", "latent_mlp", "self_supervised", "", true, "", {rollout_summary(0), rollout_summary(45)}};
+    ExperimentConfig ex;
+    ex.paper_tables = false;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_aggregation";
+    std::filesystem::remove_all(dir);
+    const std::string md = read_all(write_tables(ex, {scene_with({two})}, dir).at(0));
+    EXPECT_NE(md.find("Rows combine 2 sequences: horizons are the worst case"), std::string::npos) << md;
+    const std::vector<std::string> rows = body_rows(md);
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_NE(rows[1].find("(diverged @45)"), std::string::npos) << rows[1];
+    EXPECT_NE(rows[1].find("45 of 60"), std::string::npos) << rows[1];  // 30 + 15 of 30 + 30 frames
+}
+
+} // namespace
+} // namespace lb
