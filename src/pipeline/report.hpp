@@ -28,7 +28,10 @@ struct SceneResult {
     Index dofs = 0;
     Index latent = 0;
     int train_frames = 0;
-    double full_space_ms = 0.0;  ///< median Newton step of the dataset
+    /// Median Newton step recorded when the dataset was simulated (ms). That stage is
+    /// cached, so this may come from another run, machine load or code version than
+    /// the rollouts; Table 1's "simulation" column is the full_space rollout instead.
+    double dataset_step_ms = 0.0;
     double jvp_ms = 0.0;         ///< one-vertex JVP through the decoder (float)
     std::string decoder_layers;
     std::vector<MethodResult> methods;

@@ -106,7 +106,7 @@ private:
         for (const auto& s : m_data.sequences) {
             for (Index t = 1; t < s.num_frames(); ++t) steps.push_back(s.newton(t, 2));
         }
-        m_result.full_space_ms = 1e3 * median_of(steps);
+        m_result.dataset_step_ms = 1e3 * median_of(steps);
     }
 
     void train_autoencoder_stage()

@@ -107,5 +107,48 @@ TEST(Report, CaptionStatesHowSequencesAreCombined)
     EXPECT_NE(rows[1].find("45 of 60"), std::string::npos) << rows[1];  // 30 + 15 of 30 + 30 frames
 }
 
+// Finding 8 of issue 10: Table 1's "simulation" was the dataset's recorded Newton median
+// (11.93 ms on the full cloth) while the full_space rollout of the same run measured
+// 95.8 ms per frame. Now the column is the full_space rollout, measured like every other
+// method; the dataset's figure stands apart as "dataset step".
+TEST(Report, Table1SimulationIsTheFullSpaceRolloutOfTheSameRun)
+{
+    MethodResult ours{"ours", "latent_mlp", "self_supervised", "16", true, "", {rollout_summary(0)}};
+    RolloutSummary reference = rollout_summary(0);
+    reference.integrate_ms = reference.total_ms = 95.8;
+    reference.decode_ms = 0.0;
+    MethodResult full{"full_space", "full_space", "reference simulator", "", false, "", {reference}};
+    SceneResult r = scene_with({ours, full});
+    r.dataset_step_ms = 11.93;
+    ExperimentConfig ex;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_table1";
+    std::filesystem::remove_all(dir);
+    write_tables(ex, {r}, dir);
+    const std::string md = read_all(dir + "/table1_timings.md");
+    const std::vector<std::string> rows = body_rows(md);
+    ASSERT_EQ(rows.size(), 1u) << md;
+    const size_t sim = rows[0].find("95.8");
+    const size_t dataset = rows[0].find("11.93");
+    ASSERT_NE(sim, std::string::npos) << rows[0];
+    ASSERT_NE(dataset, std::string::npos) << rows[0];
+    EXPECT_LT(sim, dataset) << "the simulation column (4th) must hold the rollout's time: " << rows[0];
+    EXPECT_NE(md.find("| dataset step (ms) |"), std::string::npos) << md;
+
+    // Without a full_space rollout the column is empty, not the dataset's figure.
+    SceneResult alone = scene_with({ours});
+    alone.dataset_step_ms = 11.93;
+    std::filesystem::remove_all(dir);
+    write_tables(ex, {alone}, dir);
+    const std::vector<std::string> rows_alone = body_rows(read_all(dir + "/table1_timings.md"));
+    ASSERT_EQ(rows_alone.size(), 1u);
+    // "| cloth_small | 300 | 4 | — | ...": the 4th cell.
+    std::string cell = rows_alone[0];
+    for (int k = 0; k < 3; ++k) cell = cell.substr(cell.find('|', 1));
+    cell = cell.substr(1, cell.find('|', 1) - 1);
+    EXPECT_EQ(cell.substr(cell.find_first_not_of(' '), cell.find_last_not_of(' ') - cell.find_first_not_of(' ') + 1),
+              "—")
+        << rows_alone[0];
+}
+
 } // namespace
 } // namespace lb
