@@ -215,6 +215,104 @@ std::vector<TableCell> summary_table_cells(const RolloutSummary& s, SummaryScope
     return cells;
 }
 
+namespace {
+
+/// 97.5 % quantile of Student's t with `df` degrees of freedom (two-sided 95 %).
+double student_t_975(size_t df)
+{
+    static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                                   2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                                   2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+    if (df == 0) return std::numeric_limits<double>::quiet_NaN();
+    return df <= 30 ? table[df - 1] : 1.96;
+}
+
+std::string format_significant(double v, int digits) { return TableCell::significant(v, digits).text; }
+
+/// "mean ± h" (n ≥ 5) or "median [min, max]" (n < 5) of finite values; the cell's value
+/// is the mean or the median.
+TableCell statistics_cell(std::vector<double> values, int digits)
+{
+    if (values.empty()) return TableCell::missing("nan");
+    std::sort(values.begin(), values.end());
+    const size_t n = values.size();
+    if (n == 1) return TableCell(format_significant(values[0], digits), values[0]);
+    if (n < 5) {
+        const double median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+        return TableCell(format_significant(median, digits) + " [" + format_significant(values.front(), digits) + ", " +
+                             format_significant(values.back(), digits) + "]",
+                         median);
+    }
+    double mean = 0.0;
+    for (double v : values) mean += v / double(n);
+    double var = 0.0;
+    for (double v : values) var += (v - mean) * (v - mean) / double(n - 1);
+    double half = student_t_975(n - 1) * std::sqrt(var / double(n));
+    if (half < 1e-12 * std::abs(mean)) half = 0.0;  // rounding of equal values, not a spread
+    return TableCell(format_significant(mean, digits) + " ± " + format_significant(half, digits), mean);
+}
+
+} // namespace
+
+std::string seed_statistics_text(size_t n)
+{
+    if (n >= 5) return "mean ± half-width of the 95 % Student-t interval over the " + std::to_string(n) + " seeds";
+    if (n >= 2) return "median [min, max] over the " + std::to_string(n) + " seeds (fewer than 5: no interval)";
+    return "one seed";
+}
+
+std::vector<TableCell> summary_table_cells_over_seeds(const std::vector<RolloutSummary>& per_seed, SummaryScope window)
+{
+    if (per_seed.size() == 1) return summary_table_cells(per_seed.front(), window);
+    std::vector<TableCell> cells;
+    const size_t n = per_seed.size();
+    int earliest = std::numeric_limits<int>::max();
+    for (const RolloutSummary& s : per_seed) earliest = std::min(earliest, s.stable_horizon);
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (!m.table.shown || (m.scope != SummaryScope::Rollout && m.scope != window)) continue;
+        std::vector<double> values;
+        size_t cut = 0, none = 0, empty = 0, diverged = 0;
+        int earliest_cut = std::numeric_limits<int>::max();
+        for (const RolloutSummary& s : per_seed) {
+            const SummaryWindow& w = window_of(s, window);
+            if (s.stable_horizon < s.frames) ++diverged;
+            if (m.scope != SummaryScope::Rollout && w.window_frames == 0) {
+                ++empty;
+                continue;
+            }
+            if (m.scope != SummaryScope::Rollout && w.evaluated_frames < w.window_frames) {
+                ++cut;
+                earliest_cut = std::min(earliest_cut, s.stable_horizon);
+            }
+            if (m.table.error && w.evaluated_frames == 0) {
+                ++none;
+                continue;
+            }
+            const double v = m.get(s);
+            if (std::isfinite(v)) values.push_back(m.table.cell == percent_cell ? 100.0 * v : v);
+        }
+        if (empty == n) {
+            cells.push_back(TableCell::missing("— (empty)"));
+            continue;
+        }
+        if (m.table.error && none == n - empty) {
+            cells.push_back(TableCell::missing("diverged @" + std::to_string(earliest_cut) + " (all " +
+                                               std::to_string(none) + " seeds)"));
+            continue;
+        }
+        const int digits = m.table.cell ? 3 : m.table.digits;
+        TableCell c = statistics_cell(values, digits);
+        if (m.table.error && cut > 0)
+            c.text += " (" + std::to_string(cut) + "/" + std::to_string(n - empty) + " diverged, earliest @" +
+                      std::to_string(earliest_cut) + ")";
+        if (m.table.cell == stable_cell && diverged > 0)
+            c.text += " (" + std::to_string(diverged) + "/" + std::to_string(n) + " diverged, earliest @" +
+                      std::to_string(earliest) + ")";
+        cells.push_back(std::move(c));
+    }
+    return cells;
+}
+
 std::string window_label(const RolloutSummary& s, SummaryScope window)
 {
     const int split = std::max(s.train_frames, 2);

@@ -150,6 +150,17 @@ RolloutSummary read_summary(const h5::File& file, const std::string& group);
 std::vector<std::string> summary_table_columns();
 std::vector<TableCell> summary_table_cells(const RolloutSummary& s, SummaryScope window);
 
+/// The same cells over several seeds (one summary per seed, each over its sequences):
+/// with n ≥ 5 seeds "mean ± h", h the half-width of the 95 % Student-t interval of the
+/// mean; with 2 ≤ n < 5 "median [min, max]"; one seed as summary_table_cells. Errors are
+/// over the seeds with aggregated frames; "(k/n diverged @h)" says how many seeds blew
+/// up inside the window and the earliest horizon; "diverged @h (all n seeds)" if none has
+/// aggregated frames. Horizons count "never" as the frame count.
+std::vector<TableCell> summary_table_cells_over_seeds(const std::vector<RolloutSummary>& per_seed, SummaryScope window);
+
+/// How summary_table_cells_over_seeds combines n seeds, for captions.
+std::string seed_statistics_text(size_t n);
+
 /// The window's frame range as text, e.g. "test (frames ≥ 750)".
 std::string window_label(const RolloutSummary& s, SummaryScope window);
 

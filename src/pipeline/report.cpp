@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "eval/summary_schema.hpp"
@@ -29,6 +30,36 @@ std::string aggregation_text(const SceneResult& r)
            "aggregated before its own horizon), the boundary violation the largest.";
 }
 
+/// The training budget of a method and how its training ended, e.g.
+/// "1500/1500 epochs, 212 s" or "812/1500 epochs, 600 s (time cap)"; means over seeds.
+TableCell budget_cell(const std::vector<TrainingBudget>& budgets)
+{
+    double epochs = 0.0, seconds = 0.0;
+    long long budget = 0;
+    double cap = 0.0;
+    int recorded = 0, capped = 0, early = 0;
+    for (const TrainingBudget& b : budgets) {
+        if (!b.recorded) continue;
+        ++recorded;
+        epochs += double(b.epochs_run);
+        seconds += b.seconds;
+        budget = std::max(budget, b.epochs_budget);
+        cap = std::max(cap, b.max_seconds);
+        capped += b.time_limited;
+        early += b.stopped_early;
+    }
+    if (recorded == 0) return TableCell::missing();
+    epochs /= recorded;
+    seconds /= recorded;
+    char text[160];
+    std::snprintf(text, sizeof text, "%.0f/%s epochs, %.3g s%s", epochs, budget > 0 ? std::to_string(budget).c_str() : "?",
+                  seconds, cap > 0.0 ? (" (cap " + std::to_string(int(cap)) + " s)").c_str() : "");
+    std::string out = text;
+    if (capped > 0) out += ", time cap hit" + (recorded > 1 ? " (" + std::to_string(capped) + "/" + std::to_string(recorded) + ")" : std::string());
+    if (early > 0) out += ", stopped early" + (recorded > 1 ? " (" + std::to_string(early) + "/" + std::to_string(recorded) + ")" : std::string());
+    return TableCell(out, epochs);
+}
+
 Table comparison_table(const SceneResult& r, const std::vector<std::string>& only, const std::string& title)
 {
     Table t;
@@ -47,15 +78,24 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
         "boundary's rigid motion, prediction over ground truth (n/a without ground-truth motion); residual = "
         "per-DOF RMS of the implicit-Euler gradient on free DOFs over m|g| (Tan et al.'s M_phys analogue); STED "
         "after Vasa & Skala 2011 with 1-ring neighbourhoods; times are medians per frame after warm-up. " +
-        aggregation_text(r);
-    t.columns = {"method", "configuration", "window"};
+        aggregation_text(r) +
+        " 'training' is the budget and how it was used: epochs run of the epoch budget, wall-clock seconds, "
+        "the wall-clock cap if the suite sets one (max_seconds) and whether it or early stopping ended the run.";
+    size_t seeds = 0;
+    for (const auto& m : r.methods) seeds = std::max(seeds, m.per_seed.size());
+    if (seeds > 1)
+        t.caption += " Methods trained once per seed (" + std::to_string(seeds) + " seeds) show " +
+                     seed_statistics_text(seeds) + "; the others one run.";
+    t.columns = {"method", "configuration", "training", "window"};
     for (const auto& title : summary_table_columns()) t.columns.push_back(title);
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
         const RolloutSummary s = aggregate(m.summaries);
         for (const SummaryScope window : {SummaryScope::Train, SummaryScope::Test}) {
-            std::vector<TableCell> cells{m.name, m.summary, window_label(s, window)};
-            for (auto& c : summary_table_cells(s, window)) cells.push_back(std::move(c));
+            std::vector<TableCell> cells{m.name, m.summary, budget_cell(m.budgets), window_label(s, window)};
+            for (auto& c : m.per_seed.size() > 1 ? summary_table_cells_over_seeds(m.per_seed, window)
+                                                 : summary_table_cells(s, window))
+                cells.push_back(std::move(c));
             t.add_row(std::move(cells));
         }
     }

@@ -10,6 +10,17 @@
 
 namespace lb {
 
+/// A learned method's training budget and how its training ended (artefact attributes).
+struct TrainingBudget {
+    bool recorded = false;  ///< false: the method records none (nothing trained)
+    long long epochs_run = 0;
+    long long epochs_budget = 0;  ///< 0: unknown
+    double seconds = 0.0;
+    double max_seconds = 0.0;  ///< 0: no wall-clock cap
+    bool time_limited = false;
+    bool stopped_early = false;
+};
+
 /// What the tables need of one method on one scene.
 struct MethodResult {
     std::string name;     ///< label in tables
@@ -18,7 +29,11 @@ struct MethodResult {
     std::string layers;   ///< Method::layers()
     bool paper_method = false;
     std::string rollout_file;
-    std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence
+    std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence (and seed)
+    /// With a suite's `seeds`: the seeds, and per seed the summary over its sequences.
+    std::vector<std::uint64_t> seeds;
+    std::vector<RolloutSummary> per_seed;
+    std::vector<TrainingBudget> budgets;  ///< one per fit (per seed)
 };
 
 struct SceneResult {

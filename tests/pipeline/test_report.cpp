@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <cstdint>
 #include <limits>
 
 #include "eval/metrics.hpp"
@@ -39,6 +40,18 @@ RolloutSummary rollout_summary(Index stop)
     return summarize(m, 1.0, 30);
 }
 
+MethodResult method_result(const std::string& name, const std::string& method, const std::string& summary, bool paper,
+                           std::vector<RolloutSummary> summaries)
+{
+    MethodResult m;
+    m.name = name;
+    m.method = method;
+    m.summary = summary;
+    m.paper_method = paper;
+    m.summaries = std::move(summaries);
+    return m;
+}
+
 SceneResult scene_with(std::vector<MethodResult> methods)
 {
     SceneResult r;
@@ -68,8 +81,8 @@ std::vector<std::string> body_rows(const std::string& markdown)
 
 TEST(Report, DivergedRowsReadAsDivergedAndWindowsAreApart)
 {
-    MethodResult good{"ours", "latent_mlp", "self_supervised", "", true, "", {rollout_summary(0)}};
-    MethodResult bad{"sup", "latent_mlp", "supervised_l2", "", false, "", {rollout_summary(20)}};
+    MethodResult good = method_result("ours", "latent_mlp", "self_supervised", true, {rollout_summary(0)});
+    MethodResult bad = method_result("sup", "latent_mlp", "supervised_l2", false, {rollout_summary(20)});
     ExperimentConfig ex;
     ex.paper_tables = false;
     const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_diverged";
@@ -94,7 +107,7 @@ TEST(Report, CaptionStatesHowSequencesAreCombined)
 {
     // Before issue 10, multi-sequence rows mixed the worst-case horizon with mean errors
     // without saying so.
-    MethodResult two{"ours", "latent_mlp", "self_supervised", "", true, "", {rollout_summary(0), rollout_summary(45)}};
+    MethodResult two = method_result("ours", "latent_mlp", "self_supervised", true, {rollout_summary(0), rollout_summary(45)});
     ExperimentConfig ex;
     ex.paper_tables = false;
     const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_aggregation";
@@ -113,11 +126,11 @@ TEST(Report, CaptionStatesHowSequencesAreCombined)
 // method; the dataset's figure stands apart as "dataset step".
 TEST(Report, Table1SimulationIsTheFullSpaceRolloutOfTheSameRun)
 {
-    MethodResult ours{"ours", "latent_mlp", "self_supervised", "16", true, "", {rollout_summary(0)}};
+    MethodResult ours = method_result("ours", "latent_mlp", "self_supervised", true, {rollout_summary(0)});
     RolloutSummary reference = rollout_summary(0);
     reference.integrate_ms = reference.total_ms = 95.8;
     reference.decode_ms = 0.0;
-    MethodResult full{"full_space", "full_space", "reference simulator", "", false, "", {reference}};
+    MethodResult full = method_result("full_space", "full_space", "reference simulator", false, {reference});
     SceneResult r = scene_with({ours, full});
     r.dataset_step_ms = 11.93;
     ExperimentConfig ex;
@@ -148,6 +161,81 @@ TEST(Report, Table1SimulationIsTheFullSpaceRolloutOfTheSameRun)
     EXPECT_EQ(cell.substr(cell.find_first_not_of(' '), cell.find_last_not_of(' ') - cell.find_first_not_of(' ') + 1),
               "—")
         << rows_alone[0];
+}
+
+/// The cell of column `title` in a Markdown row.
+std::string cell_of(const std::string& markdown, const std::string& row, const std::string& title)
+{
+    auto split = [](const std::string& line) {
+        std::vector<std::string> cells;
+        size_t pos = 0;
+        while ((pos = line.find('|', pos)) != std::string::npos && pos + 1 < line.size()) {
+            const size_t end = line.find('|', pos + 1);
+            if (end == std::string::npos) break;
+            std::string c = line.substr(pos + 1, end - pos - 1);
+            c.erase(0, c.find_first_not_of(' '));
+            c.erase(c.find_last_not_of(' ') + 1);
+            cells.push_back(c);
+            pos = end;
+        }
+        return cells;
+    };
+    const size_t header = markdown.find("| method");
+    const std::vector<std::string> titles = split(markdown.substr(header, markdown.find('\n', header) - header));
+    const std::vector<std::string> cells = split(row);
+    for (size_t k = 0; k < titles.size() && k < cells.size(); ++k) {
+        if (titles[k] == title) return cells[k];
+    }
+    return "<no column " + title + ">";
+}
+
+TEST(Report, SeedsGiveAnIntervalOrARangeAndTheBudgetIsStated)
+{
+    // Five seeds: mean ± 95 % t-interval; the third seed diverges inside the test window.
+    MethodResult five = method_result("ours", "latent_mlp", "self_supervised", true, {});
+    for (int k = 0; k < 5; ++k) {
+        five.seeds.push_back(std::uint64_t(k));
+        five.per_seed.push_back(rollout_summary(k == 2 ? 45 : 0));
+        five.summaries.push_back(five.per_seed.back());
+        TrainingBudget b;
+        b.recorded = true;
+        b.epochs_run = 100;
+        b.epochs_budget = 100;
+        b.seconds = 10.0 + k;
+        five.budgets.push_back(b);
+    }
+    // Three seeds: median [min, max]; stopped by a wall-clock cap.
+    MethodResult three = method_result("sup", "latent_mlp", "supervised_l2", false, {});
+    for (int k = 0; k < 3; ++k) {
+        three.seeds.push_back(std::uint64_t(k));
+        RolloutSummary s = rollout_summary(0);
+        s.test.mean_rmse = 0.01 * (k + 1);
+        three.per_seed.push_back(s);
+        three.summaries.push_back(s);
+        TrainingBudget b;
+        b.recorded = true;
+        b.epochs_run = 40;
+        b.epochs_budget = 100;
+        b.seconds = 60.0;
+        b.max_seconds = 60.0;
+        b.time_limited = true;
+        three.budgets.push_back(b);
+    }
+    ExperimentConfig ex;
+    ex.paper_tables = false;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_seeds";
+    std::filesystem::remove_all(dir);
+    const std::string md = read_all(write_tables(ex, {scene_with({five, three})}, dir).at(0));
+    const std::vector<std::string> rows = body_rows(md);
+    ASSERT_EQ(rows.size(), 4u) << md;
+    EXPECT_NE(md.find("mean ± half-width of the 95 % Student-t interval over the 5 seeds"), std::string::npos) << md;
+    // Test window of "ours": 4 seeds at 0.01 and one cut at 45 with 0.01: mean 0.01 ± 0.
+    EXPECT_EQ(cell_of(md, rows[1], "mean RMSE"), "0.01 ± 0 (1/5 diverged, earliest @45)");
+    // Horizons 60, 60, 45, 60, 60: mean 57, s = 6.71, t(4) = 2.776: ± 8.33.
+    EXPECT_EQ(cell_of(md, rows[1], "stable (blow-up)"), "57 ± 8.33 (1/5 diverged, earliest @45)");
+    EXPECT_EQ(cell_of(md, rows[0], "training"), "100/100 epochs, 12 s");
+    EXPECT_EQ(cell_of(md, rows[3], "mean RMSE"), "0.02 [0.01, 0.03]");
+    EXPECT_EQ(cell_of(md, rows[3], "training"), "40/100 epochs, 60 s (cap 60 s), time cap hit (3/3)");
 }
 
 } // namespace

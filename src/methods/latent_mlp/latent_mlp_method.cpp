@@ -82,6 +82,11 @@ public:
     std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
     bool is_paper_method() const override { return m_options.loss == IntegratorLoss::SelfSupervised; }
+    bool set_seed(std::uint64_t seed) override
+    {
+        m_options.seed = seed;
+        return true;
+    }
 
     void fit(const MethodInputs& in, h5::File& out) const override
     {
@@ -100,6 +105,11 @@ public:
         out.set_attribute("/", "final_loss", s.final_loss);
         out.set_attribute("/", "train_seconds", s.seconds);
         out.set_attribute("/", "resumed", (long long)s.resumed);
+        // The training budget and how the run ended (the tables state them).
+        out.set_attribute("/", "epochs_budget", (long long)o.epochs);
+        out.set_attribute("/", "max_seconds", o.max_seconds);
+        out.set_attribute("/", "time_limited", (long long)s.time_limited);
+        out.set_attribute("/", "stopped_early", (long long)s.stopped_early);
         log_info("latent_mlp: %d epochs, final loss %.6g, %.1f s%s%s", s.epochs_run, s.final_loss, s.seconds,
                  s.resumed ? " (resumed from a checkpoint)" : "", s.time_limited ? " (time limit)" : "");
     }
