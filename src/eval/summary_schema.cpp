@@ -183,7 +183,9 @@ RolloutSummary read_summary(const h5::File& file, const std::string& group)
     RolloutSummary s;
     for (const SummaryMetric& m : summary_metrics()) {
         if (!file.has_attribute(group, m.name)) {
-            if (m.integer) throw IoError("rollout summary '" + group + "' has no attribute '" + m.name + "'");
+            if (m.integer)
+                throw IoError("rollout summary '" + group + "' has no attribute '" + m.name +
+                              "' (written by an older latentbench, before the training/test windows: roll out again)");
             m.set(s, std::numeric_limits<double>::quiet_NaN());
         } else if (m.integer) {
             m.set(s, double(file.attribute_int(group, m.name)));
