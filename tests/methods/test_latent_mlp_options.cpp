@@ -53,5 +53,22 @@ TEST(LatentMlpOptions, SelfSupervisedKeepsThePapersSwitches)
               "self_supervised, noise off, balancing off");
 }
 
+// A suite's `seeds` reach a learned method through set_seed and change its cache key;
+// methods whose fit has no seed refuse it and are fitted once.
+TEST(LatentMlpOptions, SetSeedChangesTheOptionsOfLearnedMethodsOnly)
+{
+    std::unique_ptr<Method> m = parse("loss = \"self_supervised\"\n");
+    const std::string before = m->options_text();
+    EXPECT_TRUE(m->set_seed(7));
+    EXPECT_NE(m->options_text(), before);
+    EXPECT_NE(m->options_text().find("seed = 7"), std::string::npos) << m->options_text();
+    const std::unique_ptr<Method> pca = builtin_methods().parse_text("linear_pca", "", "test");
+    const std::string pca_before = pca->options_text();
+    EXPECT_FALSE(pca->set_seed(7));
+    EXPECT_EQ(pca->options_text(), pca_before);
+    const std::unique_ptr<Method> full = builtin_methods().parse_text("full_space", "", "test");
+    EXPECT_FALSE(full->set_seed(7));
+}
+
 } // namespace
 } // namespace lb
