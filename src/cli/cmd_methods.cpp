@@ -117,9 +117,11 @@ void register_fit(CLI::App& app)
 
 static void print_summary_header() { std::printf("%s\n", format_summary_header().c_str()); }
 
+/// Two lines per rollout: its training window and its test window.
 static void print_summary(const std::string& method, const std::string& sequence, const RolloutSummary& s)
 {
-    std::printf("%s\n", format_summary_row(method, sequence, s).c_str());
+    for (const SummaryScope window : {SummaryScope::Train, SummaryScope::Test})
+        std::printf("%s\n", format_summary_row(method, sequence, s, window).c_str());
 }
 
 void register_rollout(CLI::App& app)

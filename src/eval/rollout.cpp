@@ -43,7 +43,10 @@ RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const S
     integrator.reset(x_prev2, boundary_state(sequence, 0), x_prev, boundary_state(sequence, 1));
     for (Index t = 0; t < 2; ++t) {
         r.metrics.row(t).setZero();
-        r.metrics(t, kKineticGt) = t > 0 ? model.kinetic_energy(sequence.positions.row(1).transpose(), x_prev2) : 0.0;
+        if (t > 0) context.ground_truth_metrics(x_prev, x_prev2, r.metrics.row(t));
+        r.metrics(t, kKinetic) = r.metrics(t, kKineticGt);
+        r.metrics(t, kKineticFree) = r.metrics(t, kKineticFreeGt);
+        r.metrics(t, kElastic) = r.metrics(t, kElasticGt);
         if (options.keep_positions) r.positions.row(t) = sequence.positions.row(t);
     }
     Progress progress("rollout " + r.method + " on " + sequence.name, T - 2, options.progress ? 2.0 : 1e30);
@@ -59,13 +62,18 @@ RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const S
         if (!x.allFinite()) {
             log_warn("rollout of %s on %s: non-finite state at frame %ld; stopping", r.method.c_str(),
                      sequence.name.c_str(), long(t));
+            // The prediction's columns stay NaN after the stop; the truth's are filled in.
+            for (Index u = t + 1; u < T; ++u) {
+                context.ground_truth_metrics(sequence.positions.row(u).transpose(),
+                                             sequence.positions.row(u - 1).transpose(), r.metrics.row(u));
+            }
             break;
         }
         x_prev2.swap(x_prev);
         x_prev = x;
         if (options.progress) progress.update(t - 1);
     }
-    r.summary = summarize(r.metrics, model.length_scale());
+    r.summary = summarize(r.metrics, model.length_scale(), int(sequence.train_frames));
     return r;
 }
 

@@ -21,6 +21,12 @@ inline constexpr long long kMaxRolloutFrames = 10'000'000;
 /// kMinRolloutFrames ≤ frames ≤ kMaxRolloutFrames), else what is wrong with it.
 std::string rollout_frames_problem(long long frames);
 
+/// Version of what a rollout file holds (metric columns, summary attributes); part of
+/// the pipeline's cache key so that files written by an older version are recomputed.
+/// 2: training/test windows, tiered horizons, free-DOF kinetic energy, 1-ring STED,
+///    per-DOF residual.
+inline constexpr int kRolloutFormatVersion = 2;
+
 struct RolloutOptions {
     int max_frames = 0;  ///< 0: the whole sequence; else at least kMinRolloutFrames
     bool keep_positions = true;

@@ -16,17 +16,50 @@ namespace {
 constexpr SummaryAggregation kMean = SummaryAggregation::Mean;
 constexpr SummaryAggregation kMax = SummaryAggregation::Max;
 constexpr SummaryAggregation kMin = SummaryAggregation::Min;
+constexpr SummaryAggregation kSum = SummaryAggregation::Sum;
 
-constexpr SummaryMetric::Table sig(int digits) { return {true, digits, nullptr}; }
-constexpr SummaryMetric::Table cell(SummaryCellFn fn) { return {true, 0, fn}; }
-constexpr SummaryMetric::Table hidden() { return {false, 0, nullptr}; }
+constexpr SummaryMetric::Table sig(int digits) { return {true, digits, nullptr, false}; }
+constexpr SummaryMetric::Table error(int digits) { return {true, digits, nullptr, true}; }
+constexpr SummaryMetric::Table cell(SummaryCellFn fn) { return {true, 0, fn, false}; }
+constexpr SummaryMetric::Table hidden() { return {false, 0, nullptr, false}; }
 constexpr SummaryMetric::Cli cli(const char* header, int width, const char* format) { return {header, width, format}; }
 constexpr SummaryMetric::Cli no_cli() { return {nullptr, 0, ""}; }
 
-/// "stable / frames" as text, the horizon as the sort value.
-TableCell horizon_cell(const RolloutSummary& s, const SummaryMetric&)
+const SummaryWindow& window_of(const RolloutSummary& s, SummaryScope scope)
 {
-    return TableCell(std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames), double(s.stable_horizon));
+    return scope == SummaryScope::Train ? s.train : s.test;
+}
+
+/// The stable (blow-up) horizon: "T / T" if never, "diverged @h" otherwise; sorts by h.
+TableCell stable_cell(const RolloutSummary& s, const SummaryMetric&)
+{
+    const std::string text = s.stable_horizon < s.frames ? "diverged @" + std::to_string(s.stable_horizon)
+                                                         : std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames);
+    return TableCell(text, double(s.stable_horizon));
+}
+
+/// A looser tier's horizon: "@h", or "never" (sorts as the frame count).
+TableCell tier_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    const int h = int(m.get(s));
+    return TableCell(h < s.frames ? "@" + std::to_string(h) : "never", double(h));
+}
+
+/// Frames the errors of a window were aggregated over: "a of w".
+TableCell evaluated_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    const SummaryWindow& w = window_of(s, m.scope);
+    if (w.window_frames == 0) return TableCell::missing("— (empty)");
+    return TableCell(std::to_string(w.evaluated_frames) + " of " + std::to_string(w.window_frames),
+                     double(w.evaluated_frames));
+}
+
+/// A fraction as a percentage with one decimal.
+TableCell percent_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    if (window_of(s, m.scope).window_frames == 0) return TableCell::missing("— (empty)");
+    const double v = m.get(s);
+    return std::isfinite(v) ? TableCell::fixed(100.0 * v, 1) : TableCell::missing("nan");
 }
 
 TableCell significant_cell(double v, int digits)
@@ -34,17 +67,43 @@ TableCell significant_cell(double v, int digits)
     return std::isfinite(v) ? TableCell::significant(v, digits) : TableCell::missing("nan");
 }
 
+/// An error of a window, aggregated before the stable horizon: never a bare number
+/// when the rollout blew up before the end of the window.
+TableCell error_cell(const RolloutSummary& s, const SummaryMetric& m)
+{
+    const SummaryWindow& w = window_of(s, m.scope);
+    if (w.window_frames == 0) return TableCell::missing("— (empty)");
+    const std::string diverged = "diverged @" + std::to_string(s.stable_horizon);
+    const double v = m.get(s);
+    if (w.evaluated_frames == 0) return TableCell::missing(diverged);
+    TableCell c = significant_cell(v, m.table.digits);
+    if (!std::isfinite(v)) c = TableCell::missing("n/a");  // e.g. a KE ratio without ground-truth motion
+    if (w.evaluated_frames < w.window_frames) c.text += " (" + diverged + ")";
+    return c;
+}
+
+#define LB_SCHEMA_ENTRY(scope_id, prefix, member, type, field, title, unit, agg, table, cli)                              \
+    metrics.push_back(SummaryMetric{prefix #field, #field, scope_id, title, unit, agg, std::is_integral_v<type>, table, \
+                                    cli, [](const RolloutSummary& s) { return double(s member field); },              \
+                                    [](RolloutSummary& s, double v) { s member field = static_cast<type>(v); }});
+#define LB_SCHEMA_rollout(type, field, title, unit, agg, table, cli) \
+    LB_SCHEMA_ENTRY(SummaryScope::Rollout, "", ., type, field, title, unit, agg, table, cli)
+#define LB_SCHEMA_window(type, field, title, unit, agg, table, cli)                                      \
+    LB_SCHEMA_ENTRY(SummaryScope::Train, "train_", .train., type, field, title, unit, agg, table, cli) \
+    LB_SCHEMA_ENTRY(SummaryScope::Test, "test_", .test., type, field, title, unit, agg, table, cli)
+#define LB_SCHEMA_LINE(scope, ...) LB_SCHEMA_##scope(__VA_ARGS__)
+
 std::vector<SummaryMetric> make_summary_metrics()
 {
     std::vector<SummaryMetric> metrics;
-#define LB_SUMMARY_ENTRY(type, field, title, unit, agg, table, cli)                                             \
-    metrics.push_back(SummaryMetric{#field, title, unit, agg, std::is_integral_v<type>, table, cli,              \
-                                    [](const RolloutSummary& s) { return double(s.field); },                    \
-                                    [](RolloutSummary& s, double v) { s.field = static_cast<type>(v); }});
-    LB_SUMMARY_METRICS(LB_SUMMARY_ENTRY)
-#undef LB_SUMMARY_ENTRY
+    LB_SUMMARY_METRICS(LB_SCHEMA_LINE)
     return metrics;
 }
+
+#undef LB_SCHEMA_LINE
+#undef LB_SCHEMA_window
+#undef LB_SCHEMA_rollout
+#undef LB_SCHEMA_ENTRY
 
 /// snprintf into a std::string of the right length (no truncation of long names).
 template <class... Args>
@@ -70,21 +129,39 @@ const std::vector<SummaryMetric>& summary_metrics()
     return metrics;
 }
 
+const char* to_string(SummaryScope scope)
+{
+    switch (scope) {
+    case SummaryScope::Rollout: return "rollout";
+    case SummaryScope::Train: return "train";
+    case SummaryScope::Test: return "test";
+    }
+    return "?";
+}
+
 RolloutSummary aggregate(const std::vector<RolloutSummary>& all)
 {
     RolloutSummary out;
     if (all.empty()) return out;
-    const double n = double(all.size());
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const SummaryMetric& m : summary_metrics()) {
-        double acc = m.aggregation == SummaryAggregation::Min ? m.get(all.front()) : 0.0;
+        double acc = 0.0;
+        int finite = 0;
         for (const RolloutSummary& s : all) {
             const double v = m.get(s);
             switch (m.aggregation) {
-            case SummaryAggregation::Mean: acc += v / n; break;
-            case SummaryAggregation::Max: acc = std::max(acc, v); break;
-            case SummaryAggregation::Min: acc = std::min(acc, v); break;
+            case SummaryAggregation::Mean:
+            case SummaryAggregation::Max:
+                if (!std::isfinite(v)) break;
+                acc = finite == 0 ? v : m.aggregation == SummaryAggregation::Max ? std::max(acc, v) : acc + v;
+                ++finite;
+                break;
+            case SummaryAggregation::Min: acc = &s == &all.front() ? v : std::min(acc, v); break;
+            case SummaryAggregation::Sum: acc += v; break;
             }
         }
+        if (m.aggregation == SummaryAggregation::Mean) acc = finite > 0 ? acc / double(finite) : nan;
+        if (m.aggregation == SummaryAggregation::Max && finite == 0) acc = nan;
         m.set(out, acc);
     }
     return out;
@@ -106,7 +183,9 @@ RolloutSummary read_summary(const h5::File& file, const std::string& group)
     RolloutSummary s;
     for (const SummaryMetric& m : summary_metrics()) {
         if (!file.has_attribute(group, m.name)) {
-            if (m.integer) throw IoError("rollout summary '" + group + "' has no attribute '" + m.name + "'");
+            if (m.integer)
+                throw IoError("rollout summary '" + group + "' has no attribute '" + m.name +
+                              "' (written by an older latentbench, before the training/test windows: roll out again)");
             m.set(s, std::numeric_limits<double>::quiet_NaN());
         } else if (m.integer) {
             m.set(s, double(file.attribute_int(group, m.name)));
@@ -121,35 +200,143 @@ std::vector<std::string> summary_table_columns()
 {
     std::vector<std::string> columns;
     for (const SummaryMetric& m : summary_metrics()) {
-        if (m.table.shown) columns.emplace_back(m.title);
+        if (m.table.shown && m.scope != SummaryScope::Test) columns.emplace_back(m.title);
     }
     return columns;
 }
 
-std::vector<TableCell> summary_table_cells(const RolloutSummary& s)
+std::vector<TableCell> summary_table_cells(const RolloutSummary& s, SummaryScope window)
 {
     std::vector<TableCell> cells;
     for (const SummaryMetric& m : summary_metrics()) {
-        if (!m.table.shown) continue;
-        cells.push_back(m.table.cell ? m.table.cell(s, m) : significant_cell(m.get(s), m.table.digits));
+        if (!m.table.shown || (m.scope != SummaryScope::Rollout && m.scope != window)) continue;
+        cells.push_back(m.table.cell    ? m.table.cell(s, m)
+                        : m.table.error ? error_cell(s, m)
+                                        : significant_cell(m.get(s), m.table.digits));
     }
     return cells;
 }
 
+namespace {
+
+/// 97.5 % quantile of Student's t with `df` degrees of freedom (two-sided 95 %).
+double student_t_975(size_t df)
+{
+    static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                                   2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                                   2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+    if (df == 0) return std::numeric_limits<double>::quiet_NaN();
+    return df <= 30 ? table[df - 1] : 1.96;
+}
+
+std::string format_significant(double v, int digits) { return TableCell::significant(v, digits).text; }
+
+/// "mean ± h" (n ≥ 5) or "median [min, max]" (n < 5) of finite values; the cell's value
+/// is the mean or the median.
+TableCell statistics_cell(std::vector<double> values, int digits)
+{
+    if (values.empty()) return TableCell::missing("nan");
+    std::sort(values.begin(), values.end());
+    const size_t n = values.size();
+    if (n == 1) return TableCell(format_significant(values[0], digits), values[0]);
+    if (n < 5) {
+        const double median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+        return TableCell(format_significant(median, digits) + " [" + format_significant(values.front(), digits) + ", " +
+                             format_significant(values.back(), digits) + "]",
+                         median);
+    }
+    double mean = 0.0;
+    for (double v : values) mean += v / double(n);
+    double var = 0.0;
+    for (double v : values) var += (v - mean) * (v - mean) / double(n - 1);
+    double half = student_t_975(n - 1) * std::sqrt(var / double(n));
+    if (half < 1e-12 * std::abs(mean)) half = 0.0;  // rounding of equal values, not a spread
+    return TableCell(format_significant(mean, digits) + " ± " + format_significant(half, digits), mean);
+}
+
+} // namespace
+
+std::string seed_statistics_text(size_t n)
+{
+    if (n >= 5) return "mean ± half-width of the 95 % Student-t interval over the " + std::to_string(n) + " seeds";
+    if (n >= 2) return "median [min, max] over the " + std::to_string(n) + " seeds (fewer than 5: no interval)";
+    return "one seed";
+}
+
+std::vector<TableCell> summary_table_cells_over_seeds(const std::vector<RolloutSummary>& per_seed, SummaryScope window)
+{
+    if (per_seed.size() == 1) return summary_table_cells(per_seed.front(), window);
+    std::vector<TableCell> cells;
+    const size_t n = per_seed.size();
+    int earliest = std::numeric_limits<int>::max();
+    for (const RolloutSummary& s : per_seed) earliest = std::min(earliest, s.stable_horizon);
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (!m.table.shown || (m.scope != SummaryScope::Rollout && m.scope != window)) continue;
+        std::vector<double> values;
+        size_t cut = 0, none = 0, empty = 0, diverged = 0;
+        int earliest_cut = std::numeric_limits<int>::max();
+        for (const RolloutSummary& s : per_seed) {
+            const SummaryWindow& w = window_of(s, window);
+            if (s.stable_horizon < s.frames) ++diverged;
+            if (m.scope != SummaryScope::Rollout && w.window_frames == 0) {
+                ++empty;
+                continue;
+            }
+            if (m.scope != SummaryScope::Rollout && w.evaluated_frames < w.window_frames) {
+                ++cut;
+                earliest_cut = std::min(earliest_cut, s.stable_horizon);
+            }
+            if (m.table.error && w.evaluated_frames == 0) {
+                ++none;
+                continue;
+            }
+            const double v = m.get(s);
+            if (std::isfinite(v)) values.push_back(m.table.cell == percent_cell ? 100.0 * v : v);
+        }
+        if (empty == n) {
+            cells.push_back(TableCell::missing("— (empty)"));
+            continue;
+        }
+        if (m.table.error && none == n - empty) {
+            cells.push_back(TableCell::missing("diverged @" + std::to_string(earliest_cut) + " (all " +
+                                               std::to_string(none) + " seeds)"));
+            continue;
+        }
+        const int digits = m.table.cell ? 3 : m.table.digits;
+        TableCell c = statistics_cell(values, digits);
+        if (m.table.error && cut > 0)
+            c.text += " (" + std::to_string(cut) + "/" + std::to_string(n - empty) + " diverged, earliest @" +
+                      std::to_string(earliest_cut) + ")";
+        if (m.table.cell == stable_cell && diverged > 0)
+            c.text += " (" + std::to_string(diverged) + "/" + std::to_string(n) + " diverged, earliest @" +
+                      std::to_string(earliest) + ")";
+        cells.push_back(std::move(c));
+    }
+    return cells;
+}
+
+std::string window_label(const RolloutSummary& s, SummaryScope window)
+{
+    const int split = std::max(s.train_frames, 2);
+    if (window == SummaryScope::Test) return "test (frames >= " + std::to_string(split) + ")";
+    return split > 2 ? "train (frames 2-" + std::to_string(split - 1) + ")" : "train (none)";
+}
+
 std::string format_summary_header()
 {
-    std::string line = printf_string("%-18s %-22s", "method", "sequence");
+    std::string line = printf_string("%-18s %-22s %-6s", "method", "sequence", "window");
     for (const SummaryMetric& m : summary_metrics()) {
-        if (m.cli.header) line += printf_string(" %*s", m.cli.width, m.cli.header);
+        if (m.cli.header && m.scope != SummaryScope::Test) line += printf_string(" %*s", m.cli.width, m.cli.header);
     }
     return line;
 }
 
-std::string format_summary_row(const std::string& method, const std::string& sequence, const RolloutSummary& s)
+std::string format_summary_row(const std::string& method, const std::string& sequence, const RolloutSummary& s,
+                               SummaryScope window)
 {
-    std::string line = printf_string("%-18s %-22s", method.c_str(), sequence.c_str());
+    std::string line = printf_string("%-18s %-22s %-6s", method.c_str(), sequence.c_str(), to_string(window));
     for (const SummaryMetric& m : summary_metrics()) {
-        if (m.cli.header) line += " " + cli_value(m, s);
+        if (m.cli.header && (m.scope == SummaryScope::Rollout || m.scope == window)) line += " " + cli_value(m, s);
     }
     return line;
 }

@@ -34,8 +34,9 @@ std::string IntegratorTrainOptions::describe() const
     std::ostringstream s;
     s << to_string(loss) << ", hidden [";
     for (size_t i = 0; i < hidden.size(); ++i) s << (i ? "," : "") << hidden[i];
-    s << "], noise " << (training_noise ? "on" : "off") << ", balancing " << (data_balancing ? "on" : "off")
-      << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
+    s << "], noise " << (training_noise ? "on" : "off");
+    if (loss == IntegratorLoss::SelfSupervised) s << ", balancing " << (data_balancing ? "on" : "off");
+    s << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
     return s.str();
 }
 

@@ -17,7 +17,9 @@
 // Training noise: every batch is doubled with copies whose z_{t−1}, z_{t−2} get uniform
 //   noise U(−a, a), a = noise_fraction × the batch's per-component standard deviation;
 //   boundary parameters unchanged (paper eq. 5).
-// The batch loss is the mean over its (possibly doubled) samples.
+// The batch loss is the mean over its (possibly doubled) samples. Noise is an option of
+//   either loss; the method parser (methods/latent_mlp) leaves it off for supervised_l2 unless
+//   asked for, as in the paper, where the baseline differs from the method only in the loss.
 #include <cstdint>
 #include <functional>
 #include <string>

@@ -18,6 +18,7 @@
 //               resolved options as attributes and commits it atomically);
 //   4. load     build an `Integrator` (integrators/integrator.hpp) from the artefact;
 //               rollouts, metrics and timings treat every method alike from there.
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -78,6 +79,15 @@ public:
     virtual bool has_artefact() const { return true; }
     /// True for the paper's own method: it supplies the rows of Tables 1 and 2.
     virtual bool is_paper_method() const { return false; }
+    /// Set the seed of a learned method's training (random initialisation, shuffles,
+    /// noise) before fit; part of options_text(). Returns false, changing nothing, for a
+    /// method whose fit does not depend on a seed (it is then fitted once for a suite's
+    /// `seeds`).
+    virtual bool set_seed(std::uint64_t seed)
+    {
+        (void)seed;
+        return false;
+    }
 
     /// Fit on the training frames of `in.data` and write the artefact's datasets into
     /// `out` (already created; the caller adds the common attributes and commits).

@@ -11,6 +11,7 @@
 //   run_experiment.cpp                        stage execution per scene
 //   report.hpp                                tables from the rollout files
 //   plots.hpp                                 figures (Python scripts, fork/exec)
+#include <cstdint>
 #include <memory>
 #include <set>
 #include <string>
@@ -49,6 +50,10 @@ struct ExperimentConfig {
     std::string toml_text;   ///< resolved configuration, embedded in outputs
     std::string output_dir;  ///< run directory
     int threads = 0;
+    /// `seeds = [...]`: every method whose fit depends on a seed (Method::set_seed) is
+    /// fitted and rolled out once per seed, and the tables give statistics over the
+    /// seeds. Empty: once, with the method's own seed.
+    std::vector<std::uint64_t> seeds;
     std::vector<SceneSpec> scenes;
     // evaluation
     std::string sequences = "test";

@@ -1,5 +1,6 @@
 #include "lb_paths.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <limits>
@@ -138,6 +139,14 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
     ex.description = cfg.get_string("description", "");
     ex.output_dir = cfg.get_string("output_dir", "runs/" + ex.name);
     ex.threads = cfg.get_count("threads", 0, 0, kMaxThreads);
+    for (const long long seed : cfg.get_int_array("seeds", {}, 0, kMaxSeed)) {
+        constexpr size_t kMaxSeeds = 100;
+        if (std::find(ex.seeds.begin(), ex.seeds.end(), std::uint64_t(seed)) != ex.seeds.end())
+            cfg.fail("seeds", "duplicate seed " + std::to_string(seed));
+        ex.seeds.push_back(std::uint64_t(seed));
+        if (ex.seeds.size() > kMaxSeeds) cfg.fail("seeds", "at most " + std::to_string(kMaxSeeds) + " seeds");
+    }
+    if (cfg.has("seeds") && ex.seeds.empty()) cfg.fail("seeds", "list at least one seed (or leave the key out)");
 
     AutoencoderOptions ae_defaults;
     bool latent_default_given = false;

@@ -10,6 +10,17 @@
 
 namespace lb {
 
+/// A learned method's training budget and how its training ended (artefact attributes).
+struct TrainingBudget {
+    bool recorded = false;  ///< false: the method records none (nothing trained)
+    long long epochs_run = 0;
+    long long epochs_budget = 0;  ///< 0: unknown
+    double seconds = 0.0;
+    double max_seconds = 0.0;  ///< 0: no wall-clock cap
+    bool time_limited = false;
+    bool stopped_early = false;
+};
+
 /// What the tables need of one method on one scene.
 struct MethodResult {
     std::string name;     ///< label in tables
@@ -18,7 +29,11 @@ struct MethodResult {
     std::string layers;   ///< Method::layers()
     bool paper_method = false;
     std::string rollout_file;
-    std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence
+    std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence (and seed)
+    /// With a suite's `seeds`: the seeds, and per seed the summary over its sequences.
+    std::vector<std::uint64_t> seeds;
+    std::vector<RolloutSummary> per_seed;
+    std::vector<TrainingBudget> budgets;  ///< one per fit (per seed)
 };
 
 struct SceneResult {
@@ -28,7 +43,10 @@ struct SceneResult {
     Index dofs = 0;
     Index latent = 0;
     int train_frames = 0;
-    double full_space_ms = 0.0;  ///< median Newton step of the dataset
+    /// Median Newton step recorded when the dataset was simulated (ms). That stage is
+    /// cached, so this may come from another run, machine load or code version than
+    /// the rollouts; Table 1's "simulation" column is the full_space rollout instead.
+    double dataset_step_ms = 0.0;
     double jvp_ms = 0.0;         ///< one-vertex JVP through the decoder (float)
     std::string decoder_layers;
     std::vector<MethodResult> methods;

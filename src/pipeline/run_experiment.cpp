@@ -80,10 +80,17 @@ public:
         simulate();
         train_autoencoder_stage();
         m_evaluated = select_evaluated();
-        for (const MethodSpec& m : m_spec.methods) run_method(m.name, *m.method);
+        for (const MethodSpec& m : m_spec.methods) {
+            m.method->resolve({m_scene.name, m_ae->latent_dim()});
+            if (!m_ex.seeds.empty() && m.method->set_seed(m_ex.seeds.front())) {
+                run_seeds(m.name, *m.method);
+            } else {
+                m_result.methods.push_back(run_method(m.name, m.name, *m.method));
+            }
+        }
         if (m_ex.full_space) {
             const std::unique_ptr<Method> reference = builtin_full_space();
-            run_method("full_space", *reference);
+            m_result.methods.push_back(run_method("full_space", "full_space", *reference));
         }
         return std::move(m_result);
     }
@@ -106,7 +113,7 @@ private:
         for (const auto& s : m_data.sequences) {
             for (Index t = 1; t < s.num_frames(); ++t) steps.push_back(s.newton(t, 2));
         }
-        m_result.full_space_ms = 1e3 * median_of(steps);
+        m_result.dataset_step_ms = 1e3 * median_of(steps);
     }
 
     void train_autoencoder_stage()
@@ -149,23 +156,61 @@ private:
         return full_space_method().parse(entry, defaults);
     }
 
+    /// A learned method once per seed of the suite: one table row with per-seed summaries
+    /// (files <name>.seed<k>.h5; the figures show the first seed's rollout).
+    void run_seeds(const std::string& name, Method& method)
+    {
+        MethodResult combined;
+        for (const std::uint64_t seed : m_ex.seeds) {
+            method.set_seed(seed);
+            MethodResult r = run_method(name, name + ".seed" + std::to_string(seed), method);
+            if (combined.name.empty()) {
+                combined = r;
+                combined.summaries.clear();
+            }
+            combined.summaries.insert(combined.summaries.end(), r.summaries.begin(), r.summaries.end());
+            combined.seeds.push_back(seed);
+            combined.per_seed.push_back(aggregate(r.summaries));
+            combined.budgets.push_back(r.budgets.front());
+        }
+        m_result.methods.push_back(std::move(combined));
+    }
+
+    /// The training budget and how it ended, from a learned method's artefact attributes
+    /// ("" if it records none).
+    static TrainingBudget read_budget(const std::string& artefact)
+    {
+        TrainingBudget b;
+        const h5::File f = h5::File::open(artefact);
+        if (!f.has_attribute("/", "epochs_run")) return b;
+        b.recorded = true;
+        b.epochs_run = f.attribute_int("/", "epochs_run");
+        if (f.has_attribute("/", "epochs_budget")) b.epochs_budget = f.attribute_int("/", "epochs_budget");
+        if (f.has_attribute("/", "train_seconds")) b.seconds = f.attribute_double("/", "train_seconds");
+        if (f.has_attribute("/", "max_seconds")) b.max_seconds = f.attribute_double("/", "max_seconds");
+        if (f.has_attribute("/", "time_limited")) b.time_limited = f.attribute_int("/", "time_limited") != 0;
+        if (f.has_attribute("/", "stopped_early")) b.stopped_early = f.attribute_int("/", "stopped_early") != 0;
+        return b;
+    }
+
     /// Fit (if the method has an artefact) and roll out one method: two cached stages.
-    void run_method(const std::string& name, Method& method)
+    /// @param name  the label in tables;  @param stem  its file names (name, or name.seed<k>)
+    MethodResult run_method(const std::string& name, const std::string& stem, Method& method)
     {
         method.resolve({m_scene.name, m_ae->latent_dim()});
         MethodInputs in;
         in.data = &m_data;
         in.model = m_model.get();
         if (method.needs_autoencoder()) in.autoencoder = m_ae;
-        in.checkpoint_path = m_dir + "/integrators/" + name + ".checkpoint.h5";
+        in.checkpoint_path = m_dir + "/integrators/" + stem + ".checkpoint.h5";
         in.resume = !m_cache.forced("integrators");
         in.progress = log_level() >= LogLevel::Info;
         in.newton = m_scene.newton;
         const std::string inputs_key = method.needs_autoencoder() ? m_ae_key : m_sim_key;
         const std::string key = fnv1a64_hex(inputs_key + "|" + method.method_name() + "|" + method.options_text());
-        const std::string artefact = m_dir + "/integrators/" + name + ".h5";
+        const std::string artefact = m_dir + "/integrators/" + stem + ".h5";
         if (method.has_artefact()) {
-            m_cache.run("integrators", m_spec.label + ": fit '" + name + "' (" + method.method_name() + ": " +
+            m_cache.run("integrators", m_spec.label + ": fit '" + stem + "' (" + method.method_name() + ": " +
                                            method.summary() + ")",
                         artefact, key, [&] { fit_artefact(method, in, m_scene.name, artefact, m_ex.toml_text); });
         }
@@ -175,15 +220,17 @@ private:
         mr.summary = method.summary();
         mr.layers = method.layers();
         mr.paper_method = method.is_paper_method();
-        mr.rollout_file = m_dir + "/rollouts/" + name + ".h5";
-        const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames));
-        m_cache.run("rollouts", m_spec.label + ": rollout '" + name + "'", mr.rollout_file, rkey, [&] {
+        mr.rollout_file = m_dir + "/rollouts/" + stem + ".h5";
+        mr.budgets.push_back(method.has_artefact() ? read_budget(artefact) : TrainingBudget{});
+        const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames) +
+                                              "|format " + std::to_string(kRolloutFormatVersion));
+        m_cache.run("rollouts", m_spec.label + ": rollout '" + stem + "'", mr.rollout_file, rkey, [&] {
             std::unique_ptr<Integrator> integrator;
             if (method.has_artefact()) {
                 const h5::File f = h5::File::open(artefact);
-                integrator = method.load(in, &f, name);
+                integrator = method.load(in, &f, stem);
             } else {
-                integrator = method.load(in, nullptr, name);
+                integrator = method.load(in, nullptr, stem);
             }
             RolloutOptions ro;
             ro.max_frames = m_ex.rollout_frames;
@@ -194,7 +241,7 @@ private:
             if (!line.empty()) log_info("%s: %s: %s", m_spec.label.c_str(), name.c_str(), line.c_str());
         });
         for (const RolloutRecord& rec : load_rollout_summaries(mr.rollout_file)) mr.summaries.push_back(rec.summary);
-        m_result.methods.push_back(std::move(mr));
+        return mr;
     }
 
     const ExperimentConfig& m_ex;

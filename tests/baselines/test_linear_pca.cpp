@@ -72,8 +72,8 @@ TEST(LinearPca, FullRankSubspaceReproducesTheTrajectory)
     const RolloutResult r_one = rollout(one, *d.model, seq);
     EXPECT_EQ(full.unconverged_steps(), 0);
     EXPECT_EQ(r_full.summary.stable_horizon, 30);
-    EXPECT_LT(r_full.summary.mean_rmse, 1e-4) << "full-rank subspace left the trajectory";
-    EXPECT_GT(r_one.summary.mean_rmse, 10.0 * r_full.summary.mean_rmse);
+    EXPECT_LT(r_full.summary.train.mean_rmse, 1e-4) << "full-rank subspace left the trajectory";
+    EXPECT_GT(r_one.summary.train.mean_rmse, 10.0 * r_full.summary.train.mean_rmse);
 }
 
 TEST(LinearPca, SaveLoadRoundTripAndShapeErrors)

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -33,93 +34,35 @@ RolloutSummary distinct_summary(double offset = 0.0)
     return s;
 }
 
-// ---- references: what the five hand-written places did before the schema ------------
-
-TableCell legacy_number(double v, int digits = 3)
-{
-    return std::isfinite(v) ? TableCell::significant(v, digits) : TableCell::missing("nan");
-}
-
-const std::vector<std::string> kLegacyColumns{"stable / frames", "final RMSE", "mean RMSE", "max BC viol. (m)",
-                                              "KE ratio",        "residual",   "STED",      "integrate (ms)",
-                                              "decode (ms)",     "total (ms)"};
-
-std::vector<TableCell> legacy_cells(const RolloutSummary& s)
-{
-    return {TableCell(std::to_string(s.stable_horizon) + " / " + std::to_string(s.frames), double(s.stable_horizon)),
-            legacy_number(s.final_rmse),
-            legacy_number(s.mean_rmse),
-            legacy_number(s.max_bc_violation),
-            legacy_number(s.ke_ratio),
-            legacy_number(s.mean_residual),
-            legacy_number(s.sted),
-            legacy_number(s.integrate_ms),
-            legacy_number(s.decode_ms),
-            legacy_number(s.total_ms)};
-}
-
-RolloutSummary legacy_mean_summary(const std::vector<RolloutSummary>& all)
-{
-    RolloutSummary m;
-    if (all.empty()) return m;
-    m.stable_horizon = all.front().stable_horizon;
-    m.frames = all.front().frames;
-    for (const auto& s : all) {
-        m.stable_horizon = std::min(m.stable_horizon, s.stable_horizon);
-        m.frames = std::min(m.frames, s.frames);
-        m.final_rmse += s.final_rmse / double(all.size());
-        m.mean_rmse += s.mean_rmse / double(all.size());
-        m.max_bc_violation = std::max(m.max_bc_violation, s.max_bc_violation);
-        m.ke_ratio += s.ke_ratio / double(all.size());
-        m.mean_residual += s.mean_residual / double(all.size());
-        m.m_rms += s.m_rms / double(all.size());
-        m.sted += s.sted / double(all.size());
-        m.integrate_ms += s.integrate_ms / double(all.size());
-        m.decode_ms += s.decode_ms / double(all.size());
-        m.total_ms += s.total_ms / double(all.size());
-    }
-    return m;
-}
-
-std::string legacy_header()
-{
-    char b[512];
-    std::snprintf(b, sizeof(b), "%-18s %-22s %6s %8s %10s %10s %10s %8s %10s %9s %9s", "method", "sequence", "frames",
-                  "stable", "final_rmse", "mean_rmse", "max_bc_m", "ke_ratio", "residual", "sted", "total_ms");
-    return b;
-}
-
-std::string legacy_row(const std::string& method, const std::string& sequence, const RolloutSummary& s)
-{
-    char b[512];
-    std::snprintf(b, sizeof(b), "%-18s %-22s %6d %8d %10.4g %10.4g %10.4g %8.3f %10.4g %9.4g %9.4f", method.c_str(),
-                  sequence.c_str(), s.frames, s.stable_horizon, s.final_rmse, s.mean_rmse, s.max_bc_violation,
-                  s.ke_ratio, s.mean_residual, s.sted, s.total_ms);
-    return b;
-}
-
-/// Summaries that exercise the formatting: typical, tiny/huge, non-finite, zero.
+/// Summaries that exercise the formatting: typical, diverged inside the test window, zero.
 std::vector<RolloutSummary> formatting_cases()
 {
     RolloutSummary typical;
     typical.frames = 400;
-    typical.stable_horizon = 103;
-    typical.final_rmse = 0.0123456;
-    typical.mean_rmse = 0.00098765;
-    typical.max_bc_violation = 1.5e-7;
-    typical.ke_ratio = 0.87654;
-    typical.mean_residual = 12345.678;
-    typical.m_rms = 0.02;
-    typical.sted = 0.333333;
+    typical.train_frames = 100;
+    typical.sequences = 1;
+    typical.stable_horizon = 400;
+    typical.horizon_loose = 400;
+    typical.horizon_tight = 103;
+    for (SummaryWindow* w : {&typical.train, &typical.test}) {
+        w->window_frames = w == &typical.train ? 98 : 300;
+        w->evaluated_frames = w->window_frames;
+        w->frac_tight = 0.25;
+        w->final_rmse = 0.0123456;
+        w->mean_rmse = 0.00098765;
+        w->max_bc_violation = 1.5e-7;
+        w->ke_ratio = 0.87654;
+        w->mean_residual = 12345.678;
+        w->m_rms = 0.02;
+        w->sted = 0.333333;
+    }
     typical.integrate_ms = 0.0421;
     typical.decode_ms = 0.3;
     typical.total_ms = 0.3421;
     RolloutSummary diverged = typical;
-    diverged.final_rmse = kNan;
-    diverged.mean_rmse = kInf;
-    diverged.max_bc_violation = -kInf;
-    diverged.ke_ratio = 0.0;
-    diverged.sted = kNan;
+    diverged.stable_horizon = 214;
+    diverged.test.evaluated_frames = 114;
+    diverged.test.final_rmse = 0.4;
     return {typical, diverged, RolloutSummary{}, distinct_summary()};
 }
 
@@ -130,7 +73,9 @@ TEST(SummarySchema, NamesAndTitlesAreUnique)
     std::set<std::string> names, titles;
     for (const SummaryMetric& m : summary_metrics()) {
         EXPECT_TRUE(names.insert(m.name).second) << "duplicate name " << m.name;
-        EXPECT_TRUE(titles.insert(m.title).second) << "duplicate title " << m.title;
+        if (m.scope != SummaryScope::Test) {  // the two windows share their titles (one row each)
+            EXPECT_TRUE(titles.insert(m.title).second) << "duplicate title " << m.title;
+        }
         EXPECT_GT(std::strlen(m.name), 0u);
         if (m.cli.header) {
             EXPECT_GT(m.cli.width, 0) << m.name;
@@ -151,86 +96,77 @@ TEST(SummarySchema, AccessorsReachTheirOwnField)
     }
 }
 
-TEST(SummarySchema, KnownMetricsHaveTheirAttributeNamesAndUnits)
+TEST(SummarySchema, WindowMetricsAppearOncePerWindow)
 {
-    // The HDF5 attribute names of rollout files written before the schema.
-    const std::vector<std::string> legacy{"frames",  "stable_horizon", "final_rmse", "mean_rmse",
-                                          "max_bc_violation", "ke_ratio", "mean_residual", "m_rms",
-                                          "sted", "integrate_ms", "decode_ms", "total_ms"};
     std::set<std::string> names;
     for (const SummaryMetric& m : summary_metrics()) names.insert(m.name);
-    for (const auto& n : legacy) EXPECT_EQ(names.count(n), 1u) << n;
+    for (const char* n : {"frames", "train_frames", "stable_horizon", "horizon_loose", "horizon_tight", "total_ms",
+                          "train_mean_rmse", "test_mean_rmse", "train_ke_ratio", "test_ke_ratio",
+                          "test_max_bc_violation", "test_frac_blowup", "test_evaluated_frames"}) {
+        EXPECT_EQ(names.count(n), 1u) << n;
+    }
+    EXPECT_EQ(names.count("mean_rmse"), 0u) << "errors exist per window only";
     for (const SummaryMetric& m : summary_metrics()) {
         const std::string name = m.name;
-        if (name == "max_bc_violation" || name == "m_rms") {
+        if (name.find("max_bc_violation") != std::string::npos || name.find("m_rms") != std::string::npos) {
             EXPECT_STREQ(m.unit, "m");
         }
-        if (name == "total_ms") {
-            EXPECT_STREQ(m.unit, "ms");
+        if (m.scope == SummaryScope::Train) {
+            EXPECT_EQ(name, "train_" + std::string(m.field));
+        }
+        if (m.scope == SummaryScope::Test) {
+            EXPECT_EQ(name, "test_" + std::string(m.field));
         }
     }
 }
 
-// ---- tables and printout render as before ----------------------------------------------
-
-TEST(SummarySchema, TableColumnsAndCellsMatchTheLegacyTable)
-{
-    EXPECT_EQ(summary_table_columns(), kLegacyColumns);
-    Table now, before;
-    now.title = before.title = "t";
-    now.columns = before.columns = {"method"};
-    for (const auto& c : summary_table_columns()) now.columns.push_back(c);
-    for (const auto& c : kLegacyColumns) before.columns.push_back(c);
-    for (const RolloutSummary& s : formatting_cases()) {
-        const std::vector<TableCell> cells = summary_table_cells(s);
-        const std::vector<TableCell> expected = legacy_cells(s);
-        ASSERT_EQ(cells.size(), expected.size());
-        for (size_t c = 0; c < cells.size(); ++c) {
-            EXPECT_EQ(cells[c].text, expected[c].text) << kLegacyColumns[c];
-            ASSERT_EQ(cells[c].value.has_value(), expected[c].value.has_value()) << kLegacyColumns[c];
-            if (cells[c].value) {
-                EXPECT_TRUE(same_bits(*cells[c].value, *expected[c].value)) << kLegacyColumns[c];
-            }
-        }
-        std::vector<TableCell> row{"m"}, legacy_row_cells{"m"};
-        row.insert(row.end(), cells.begin(), cells.end());
-        legacy_row_cells.insert(legacy_row_cells.end(), expected.begin(), expected.end());
-        now.add_row(row);
-        before.add_row(legacy_row_cells);
-    }
-    EXPECT_EQ(to_markdown(now), to_markdown(before));
-    EXPECT_EQ(to_csv(now), to_csv(before));
-    EXPECT_EQ(to_latex(now), to_latex(before));
-}
+// ---- tables and printout ----------------------------------------------------------------
 
 TEST(SummarySchema, TableCellsOfKnownValues)
 {
+    const std::vector<std::string> columns = summary_table_columns();
     const RolloutSummary s = formatting_cases()[0];
-    const std::vector<TableCell> cells = summary_table_cells(s);
-    ASSERT_EQ(cells.size(), 10u);
-    EXPECT_EQ(cells[0].text, "103 / 400");
-    EXPECT_EQ(*cells[0].value, 103.0);
-    EXPECT_EQ(cells[1].text, "0.0123");
-    EXPECT_EQ(cells[3].text, "1.5e-07");
-    EXPECT_EQ(cells[5].text, "1.23e+04");
-    EXPECT_EQ(cells[9].text, "0.342");
-    const std::vector<TableCell> diverged = summary_table_cells(formatting_cases()[1]);
-    EXPECT_EQ(diverged[1].text, "nan");
-    EXPECT_TRUE(std::isnan(*diverged[1].value));
-    EXPECT_EQ(diverged[2].text, "nan");  // +inf, as before
-    EXPECT_EQ(diverged[4].text, "0");
+    const std::vector<TableCell> cells = summary_table_cells(s, SummaryScope::Test);
+    ASSERT_EQ(cells.size(), columns.size());
+    auto cell = [&](const std::vector<TableCell>& row, const std::string& title) {
+        const auto it = std::find(columns.begin(), columns.end(), title);
+        EXPECT_NE(it, columns.end()) << title;
+        return row[size_t(it - columns.begin())];
+    };
+    EXPECT_EQ(cell(cells, "stable (blow-up)").text, "400 / 400");
+    EXPECT_EQ(cell(cells, "first RMSE > 0.1").text, "never");
+    EXPECT_EQ(cell(cells, "first RMSE > 0.02").text, "@103");
+    EXPECT_EQ(cell(cells, "% frames > 0.02").text, "25.0");
+    EXPECT_EQ(cell(cells, "frames aggregated").text, "300 of 300");
+    EXPECT_EQ(cell(cells, "final RMSE").text, "0.0123");
+    EXPECT_EQ(cell(cells, "max BC viol. (m)").text, "1.5e-07");
+    EXPECT_EQ(cell(cells, "residual").text, "1.23e+04");
+    EXPECT_EQ(cell(cells, "total (ms)").text, "0.342");
+    const RolloutSummary d = formatting_cases()[1];
+    const std::vector<TableCell> diverged = summary_table_cells(d, SummaryScope::Test);
+    EXPECT_EQ(cell(diverged, "stable (blow-up)").text, "diverged @214");
+    EXPECT_EQ(cell(diverged, "final RMSE").text, "0.4 (diverged @214)");
+    EXPECT_EQ(cell(diverged, "KE ratio (free)").text, "0.877 (diverged @214)");
+    EXPECT_EQ(cell(diverged, "frames aggregated").text, "114 of 300");
+    // The training window ended before the blow-up: plain numbers.
+    EXPECT_EQ(cell(summary_table_cells(d, SummaryScope::Train), "final RMSE").text, "0.0123");
 }
 
-TEST(SummarySchema, CliPrintoutMatchesTheLegacyPrintf)
+TEST(SummarySchema, CliPrintsOneLinePerWindow)
 {
-    EXPECT_EQ(format_summary_header(), legacy_header());
-    for (const RolloutSummary& s : formatting_cases()) {
-        EXPECT_EQ(format_summary_row("self_supervised", "corners_line", s), legacy_row("self_supervised", "corners_line", s));
-    }
+    const std::string header = format_summary_header();
+    EXPECT_NE(header.find("window"), std::string::npos);
+    EXPECT_NE(header.find("stable"), std::string::npos);
+    const RolloutSummary s = formatting_cases()[0];
+    const std::string train = format_summary_row("self_supervised", "corners_line", s, SummaryScope::Train);
+    const std::string test = format_summary_row("self_supervised", "corners_line", s, SummaryScope::Test);
+    EXPECT_NE(train.find(" train "), std::string::npos) << train;
+    EXPECT_NE(test.find(" test "), std::string::npos) << test;
+    EXPECT_EQ(train.size(), header.size()) << train << "\n" << header;
     // Names longer than their column are not cut.
     const std::string long_name(40, 'x');
-    EXPECT_EQ(format_summary_row(long_name, long_name, formatting_cases()[0]),
-              legacy_row(long_name, long_name, formatting_cases()[0]));
+    EXPECT_NE(format_summary_row(long_name, long_name, s, SummaryScope::Test).find(long_name + " " + long_name),
+              std::string::npos);
 }
 
 // ---- aggregation --------------------------------------------------------------------------
@@ -243,34 +179,60 @@ TEST(SummarySchema, AggregateFollowsEachMetricsRule)
     const RolloutSummary m = aggregate({a, b});
     EXPECT_EQ(m.stable_horizon, 50);
     EXPECT_EQ(m.frames, 300);
-    EXPECT_EQ(m.max_bc_violation, std::max(a.max_bc_violation, b.max_bc_violation));
-    EXPECT_EQ(m.final_rmse, a.final_rmse / 2.0 + b.final_rmse / 2.0);
-    EXPECT_EQ(m.total_ms, a.total_ms / 2.0 + b.total_ms / 2.0);
+    EXPECT_EQ(m.sequences, a.sequences + b.sequences);
+    EXPECT_EQ(m.test.max_bc_violation, std::max(a.test.max_bc_violation, b.test.max_bc_violation));
+    EXPECT_EQ(m.test.final_rmse, (a.test.final_rmse + b.test.final_rmse) / 2.0);
     for (const SummaryMetric& metric : summary_metrics()) {
         const double va = metric.get(a), vb = metric.get(b), v = metric.get(m);
         switch (metric.aggregation) {
-        case SummaryAggregation::Mean: EXPECT_EQ(v, va / 2.0 + vb / 2.0) << metric.name; break;
+        case SummaryAggregation::Mean: EXPECT_DOUBLE_EQ(v, (va + vb) / 2.0) << metric.name; break;
         case SummaryAggregation::Max: EXPECT_EQ(v, std::max(va, vb)) << metric.name; break;
         case SummaryAggregation::Min: EXPECT_EQ(v, std::min(va, vb)) << metric.name; break;
+        case SummaryAggregation::Sum: EXPECT_EQ(v, va + vb) << metric.name; break;
         }
     }
     const RolloutSummary empty = aggregate({});
     for (const SummaryMetric& metric : summary_metrics()) EXPECT_EQ(metric.get(empty), 0.0) << metric.name;
 }
 
-TEST(SummarySchema, AggregateIsBitIdenticalToTheLegacyMeanSummary)
+// Finding 1 of issue 10: the worst-case boundary violation over sequences started from
+// 0 and skipped a NaN (std::max(0, NaN) == 0), so a diverged sequence printed as a
+// perfect 0. Now NaN means "no frames aggregated" and the cell says "diverged".
+TEST(SummarySchema, AggregateOfADivergedSequenceNeverReadsAsZero)
 {
-    std::vector<RolloutSummary> all;
-    for (int k = 0; k < 7; ++k) all.push_back(distinct_summary(0.37 * k));
-    all[3].max_bc_violation = kNan;  // skipped by the max, as before
-    for (size_t n = 1; n <= all.size(); ++n) {
-        const std::vector<RolloutSummary> some(all.begin(), all.begin() + long(n));
-        const RolloutSummary now = aggregate(some), before = legacy_mean_summary(some);
-        for (const SummaryMetric& m : summary_metrics()) {
-            EXPECT_TRUE(same_bits(m.get(now), m.get(before))) << m.name << " over " << n << ": " << m.get(now)
-                                                              << " vs " << m.get(before);
+    RolloutSummary diverged = formatting_cases()[0];
+    diverged.stable_horizon = 5;
+    diverged.train.evaluated_frames = 3;
+    diverged.test.evaluated_frames = 0;
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (m.scope == SummaryScope::Test && !m.integer && std::string(m.field).rfind("frac_", 0) != 0)
+            m.set(diverged, kNan);
+    }
+    const RolloutSummary alone = aggregate({diverged});
+    EXPECT_TRUE(std::isnan(alone.test.max_bc_violation)) << "was 0 before issue 10";
+    EXPECT_TRUE(std::isnan(alone.test.ke_ratio));
+    for (const RolloutSummary& s : {alone, aggregate({diverged, diverged})}) {
+        const std::vector<TableCell> cells = summary_table_cells(s, SummaryScope::Test);
+        const std::vector<std::string> columns = summary_table_columns();
+        for (size_t c = 0; c < cells.size(); ++c) {
+            EXPECT_NE(cells[c].text, "0") << columns[c];
+            if (columns[c].find("RMSE") != std::string::npos && columns[c].find("frames") == std::string::npos &&
+                columns[c].find("first") == std::string::npos) {
+                EXPECT_EQ(cells[c].text, "diverged @5") << columns[c];
+            }
+        }
+        const std::vector<TableCell> train = summary_table_cells(s, SummaryScope::Train);
+        for (size_t c = 0; c < train.size(); ++c) {
+            if (columns[c] == "mean RMSE" || columns[c] == "max BC viol. (m)" || columns[c] == "KE ratio (free)") {
+                EXPECT_NE(train[c].text.find("(diverged @5)"), std::string::npos) << columns[c] << ": " << train[c].text;
+            }
         }
     }
+    // Mixed with a stable sequence: the stable one's value, still marked as cut.
+    const RolloutSummary mixed = aggregate({diverged, formatting_cases()[0]});
+    EXPECT_EQ(mixed.test.max_bc_violation, formatting_cases()[0].test.max_bc_violation);
+    EXPECT_EQ(mixed.stable_horizon, 5);
+    EXPECT_LT(mixed.test.evaluated_frames, mixed.test.window_frames);
 }
 
 // ---- HDF5 ------------------------------------------------------------------------------
@@ -280,6 +242,9 @@ TEST(SummarySchema, EveryMetricRoundTripsThroughHdf5BitExactly)
     const std::string path = testing::fresh_dir("summary_schema") + "/summary.h5";
     const RolloutSummary s = distinct_summary();
     RolloutSummary odd = formatting_cases()[1];  // NaN and ±inf survive too
+    odd.test.final_rmse = kNan;
+    odd.test.mean_rmse = kInf;
+    odd.train.max_bc_violation = -kInf;
     odd.integrate_ms = std::nextafter(1.0, 2.0);
     {
         h5::File f = h5::File::create(path);
@@ -296,39 +261,25 @@ TEST(SummarySchema, EveryMetricRoundTripsThroughHdf5BitExactly)
     }
 }
 
-TEST(SummarySchema, ReadsTheAttributeLayoutWrittenBeforeTheSchema)
+TEST(SummarySchema, AFileWithoutTheWindowsIsRefusedAndMissingDoublesReadAsNan)
 {
     const std::string path = testing::fresh_dir("summary_schema_legacy") + "/legacy.h5";
-    const RolloutSummary s = distinct_summary();
     {
-        // What save_rollouts wrote by hand before the schema.
         h5::File f = h5::File::create(path);
-        const std::string g = "rollouts/0";
-        f.set_attribute(g, "frames", (long long)s.frames);
-        f.set_attribute(g, "stable_horizon", (long long)s.stable_horizon);
-        f.set_attribute(g, "final_rmse", s.final_rmse);
-        f.set_attribute(g, "mean_rmse", s.mean_rmse);
-        f.set_attribute(g, "max_bc_violation", s.max_bc_violation);
-        f.set_attribute(g, "ke_ratio", s.ke_ratio);
-        f.set_attribute(g, "mean_residual", s.mean_residual);
-        f.set_attribute(g, "m_rms", s.m_rms);
-        f.set_attribute(g, "sted", s.sted);
-        f.set_attribute(g, "integrate_ms", s.integrate_ms);
-        f.set_attribute(g, "decode_ms", s.decode_ms);
-        f.set_attribute(g, "total_ms", s.total_ms);
-        // A file from before a metric existed, and one missing an integer metric.
+        // What save_rollouts wrote before the windows (issue 10): no train_frames.
         f.set_attribute("old", "frames", 10LL);
         f.set_attribute("old", "stable_horizon", 8LL);
-        f.set_attribute("broken", "final_rmse", 0.5);
+        f.set_attribute("old", "mean_rmse", 0.5);
+        // Every integer, but no doubles.
+        for (const SummaryMetric& m : summary_metrics()) {
+            if (m.integer) f.set_attribute("ints", m.name, 3LL);
+        }
     }
     const h5::File f = h5::File::open(path);
-    const RolloutSummary back = read_summary(f, "rollouts/0");
-    for (const SummaryMetric& m : summary_metrics()) EXPECT_TRUE(same_bits(m.get(back), m.get(s))) << m.name;
-    const RolloutSummary old = read_summary(f, "old");
-    EXPECT_EQ(old.frames, 10);
-    EXPECT_EQ(old.stable_horizon, 8);
-    EXPECT_TRUE(std::isnan(old.sted));
-    EXPECT_THROW(read_summary(f, "broken"), IoError);
+    EXPECT_THROW(read_summary(f, "old"), IoError);
+    const RolloutSummary ints = read_summary(f, "ints");
+    EXPECT_EQ(ints.test.window_frames, 3);
+    EXPECT_TRUE(std::isnan(ints.test.sted));
 }
 
 TEST(SummarySchema, SaveAndLoadRolloutsRoundTripTheSummary)
@@ -341,7 +292,7 @@ TEST(SummarySchema, SaveAndLoadRolloutsRoundTripTheSummary)
         results[k].metrics = MatrixXd::Constant(3, kNumMetricColumns, 0.25 * double(k));
         results[k].summary = distinct_summary(double(k));
     }
-    results[1].summary.final_rmse = kNan;
+    results[1].summary.test.final_rmse = kNan;
     save_rollouts(results, path, "config");
     const std::vector<RolloutRecord> records = load_rollout_summaries(path);
     ASSERT_EQ(records.size(), results.size());

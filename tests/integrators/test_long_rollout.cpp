@@ -59,10 +59,11 @@ TEST_P(LongRollout, SelfSupervisedStaysStableAndOnTheBoundary)
     const RolloutResult r = rollout(integrator, model, seq);
     EXPECT_TRUE(r.positions.allFinite()) << c.scene << ": non-finite state in the rollout";
     EXPECT_EQ(r.summary.stable_horizon, seq.num_frames()) << c.scene;
-    EXPECT_LE(r.summary.max_bc_violation, c.max_bc_violation * model.length_scale())
-        << c.scene << ": max boundary violation " << r.summary.max_bc_violation << " m";
+    const double max_bc = std::max(r.summary.train.max_bc_violation, r.summary.test.max_bc_violation);
+    EXPECT_LE(max_bc, c.max_bc_violation * model.length_scale())
+        << c.scene << ": max boundary violation " << max_bc << " m";
     log_info("%s: %d frames, stable %d, final RMSE %.4f, max BC violation %.3g m", c.scene, r.summary.frames,
-             r.summary.stable_horizon, r.summary.final_rmse, r.summary.max_bc_violation);
+             r.summary.stable_horizon, r.summary.test.final_rmse, max_bc);
 }
 
 INSTANTIATE_TEST_SUITE_P(SmallScenes, LongRollout,

@@ -287,6 +287,8 @@ void write_fake_rollouts(const std::string& path)
             m(t, lb::kBcViolation) = 1e-5 * t;
             m(t, lb::kKinetic) = 0.8 * (1.0 + std::sin(0.3 * t));
             m(t, lb::kKineticGt) = 1.0 + std::sin(0.3 * t);
+            m(t, lb::kKineticFree) = 0.1 * m(t, lb::kKinetic);
+            m(t, lb::kKineticFreeGt) = 0.1 * m(t, lb::kKineticGt);
             m(t, lb::kElastic) = m(t, lb::kElasticGt) = 0.1;
         }
         if (s.stable < frames) m.bottomRows(5).setConstant(std::nan(""));  // a diverged tail
@@ -315,7 +317,7 @@ TEST(PlotScripts, PlotRolloutsWritesPngs)
     ASSERT_EQ(code, 0) << read_text(dir + "/stderr.txt");
     const std::string printed = read_text(dir + "/stdout.txt");
     for (const char* sequence : {"corners_line", "second"}) {
-        for (const char* metric : {"rmse", "bc_violation", "kinetic"}) {
+        for (const char* metric : {"rmse", "bc_violation", "kinetic", "kinetic_free"}) {
             const std::string png = out + "/" + sequence + "_" + metric + ".png";
             ASSERT_TRUE(fs::exists(png)) << png;
             EXPECT_GT(fs::file_size(png), 1000u) << png;
@@ -323,7 +325,7 @@ TEST(PlotScripts, PlotRolloutsWritesPngs)
             EXPECT_NE(printed.find(png), std::string::npos) << printed;
         }
     }
-    EXPECT_EQ(directory_entries(out).size(), 6u);  // no temporary files left
+    EXPECT_EQ(directory_entries(out).size(), 8u);  // no temporary files left
 }
 
 TEST(PlotScripts, PlotRolloutsRejectsMissingAndCorruptFiles)

@@ -141,6 +141,9 @@ TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
         const std::string table((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         EXPECT_NE(table.find("| pca "), std::string::npos) << table;
         EXPECT_NE(table.find("linear PCA, d = 4"), std::string::npos) << table;
+        // Training and test windows apart (issue 10).
+        EXPECT_NE(table.find("| train (frames 2-"), std::string::npos) << table;
+        EXPECT_NE(table.find("| test (frames >= "), std::string::npos) << table;
     }
 
     const RunResult second = run_experiment(ex, options);
@@ -154,6 +157,41 @@ TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
 
     options.force = {"everything"};
     EXPECT_THROW(run_experiment(ex, options), ConfigError);
+}
+
+std::string read_all(const std::string& path);
+
+// Seeds (issue 10): every learned method is fitted and rolled out once per seed, methods
+// without a seed once; the tables give statistics over the seeds.
+TEST(Experiment, SeedsFitEveryLearnedMethodOncePerSeed)
+{
+    set_log_level(LogLevel::Quiet);
+    std::string text = kTiny;
+    text.replace(text.find("name = \"tiny\"\n"), 14, "name = \"tiny\"\nseeds = [0, 7]\n");
+    const std::string path = write_experiment("seeds", text);
+    const ExperimentConfig ex = load_experiment(path, builtin_methods());
+    ASSERT_EQ(ex.seeds.size(), 2u);
+    RunOptions options;
+    options.output_dir = fs::path(path).parent_path().string() + "/run";
+    const RunResult run = run_experiment(ex, options);
+    // simulate, autoencoder, (ours, sup) × 2 seeds + pca, their 5 rollouts + full space
+    EXPECT_EQ(run.stages_run, 13);
+    const std::string dir = options.output_dir + "/cantilever_small";
+    for (const char* f : {"/integrators/ours.seed0.h5", "/integrators/ours.seed7.h5", "/integrators/sup.seed7.h5",
+                          "/integrators/pca.h5", "/rollouts/ours.seed7.h5", "/rollouts/pca.h5"}) {
+        EXPECT_TRUE(fs::exists(dir + f)) << f;
+    }
+    EXPECT_FALSE(fs::exists(dir + "/integrators/pca.seed0.h5"));
+    const std::string table = read_all(options.output_dir + "/tables/methods_cantilever_small.md");
+    EXPECT_NE(table.find("median [min, max] over the 2 seeds"), std::string::npos) << table;
+    EXPECT_NE(table.find("| ours "), std::string::npos) << table;
+    EXPECT_NE(table.find(" epochs, "), std::string::npos) << table;  // the training budget column
+
+    for (const char* bad : {"seeds = [-1]\n", "seeds = [1, 1]\n", "seeds = []\n"}) {
+        std::string t = kTiny;
+        t.replace(t.find("name = \"tiny\"\n"), 14, std::string("name = \"tiny\"\n") + bad);
+        EXPECT_THROW(load_experiment(write_experiment("bad_seeds", t), builtin_methods()), ConfigError) << bad;
+    }
 }
 
 long long artefact_flag(const std::string& file, const char* key) { return h5::File::open(file).attribute_int("/", key); }
