@@ -583,12 +583,13 @@ std::string mutate_bytes(Rng& rng, const std::string& path)
 std::string hostile_copy(Rng& rng, const std::string& source, const std::string& target)
 {
     fs::copy_file(source, target, fs::copy_options::overwrite_existing);
+    // Structural edits first: they go through the HDF5 library, which must not be handed
+    // a file already damaged byte-wise (it can loop forever on one, in this process).
     std::string what;
-    const int edits = 1 + int(pick(rng, 2));
-    for (int e = 0; e < edits; ++e) {
-        if (!what.empty()) what += "; ";
-        what += pick(rng, 3) ? mutate_structure(rng, target) : mutate_bytes(rng, target);
-    }
+    const int structural = int(pick(rng, 3));  // 0, 1 or 2
+    const bool bytes = structural == 0 || pick(rng, 3) == 0;
+    for (int e = 0; e < structural; ++e) what += (what.empty() ? "" : "; ") + mutate_structure(rng, target);
+    if (bytes) what += (what.empty() ? "" : "; ") + mutate_bytes(rng, target);
     return what;
 }
 
