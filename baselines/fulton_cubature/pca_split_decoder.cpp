@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "nn/linear.hpp"
+#include "nn/network_derivatives.hpp"
 
 namespace lb {
 
@@ -48,6 +49,11 @@ VectorXd PcaSplitDecoder::inner(const Eigen::Ref<const VectorXd>& z)
 VectorXd PcaSplitDecoder::vjp(const Eigen::Ref<const VectorXd>& v)
 {
     return m_inner.backward(MatrixXd(v), false).col(0);
+}
+
+MatrixXd PcaSplitDecoder::inner_jacobian(const Eigen::Ref<const VectorXd>& z)
+{
+    return nn::jacobian(m_inner, z);
 }
 
 void PcaSplitDecoder::offset_into(const Eigen::Ref<const VectorXd>& targets, Eigen::Ref<VectorXd> c) const

@@ -31,6 +31,8 @@ public:
     VectorXd inner(const Eigen::Ref<const VectorXd>& z);
     /// J_g(z)ᵀ v at the z of the last inner() call.   @param v  d_pca   @return latent
     VectorXd vjp(const Eigen::Ref<const VectorXd>& v);
+    /// J_g(z) (d_pca × latent), forward mode; overwrites the cache of inner().
+    MatrixXd inner_jacobian(const Eigen::Ref<const VectorXd>& z);
 
     /// U (3N × d_pca).
     const MatrixXd& basis() const { return m_U; }

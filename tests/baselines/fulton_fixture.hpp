@@ -16,8 +16,9 @@ struct FultonProblem {
 
     /// The first `frames` frames of the scene's small variant, the first `train_frames`
     /// of them for training; an autoencoder (latent 3, hidden 32-32, PCA 12) trained for
-    /// `epochs` epochs on those.
-    FultonProblem(const std::string& scene, int frames, int train_frames, int epochs = 300)
+    /// `epochs` epochs on those (hidden widths and PCA size overridable).
+    FultonProblem(const std::string& scene, int frames, int train_frames, int epochs = 300, Index hidden = 32,
+                  Index pca = 12)
     {
         set_log_level(LogLevel::Quiet);
         Scene s = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene + ".toml", {"small"});
@@ -30,8 +31,8 @@ struct FultonProblem {
         model = std::make_unique<PhysicsModel>(data.physics);
         AutoencoderOptions ao;
         ao.latent_dim = 3;
-        ao.hidden = {32, 32};
-        ao.pca_dim = 12;
+        ao.hidden = {hidden, hidden};
+        ao.pca_dim = pca;
         ao.epochs = epochs;
         ao.batch_size = 64;
         ao.learning_rate = 1e-3;
