@@ -40,7 +40,7 @@ class PcaSplitDecoder;
 
 struct CubatureOptions {
     /// Stop when the relative force error on the training poses is at most this.
-    double tolerance = 0.05;
+    double tolerance = 0.02;
     /// Stop at this many selected elements.
     int max_elements = 200;
     /// Random unselected elements scored per greedy iteration (all if fewer remain).
