@@ -130,6 +130,7 @@ Cubature Cubature::all_elements(const PhysicsModel& model)
     for (size_t t = 0; t < model.elastic_terms().size(); ++t)
         for (Index e = 0; e < model.elastic_terms()[t]->num_elements(); ++e) c.elements.push_back({int(t), e, 1.0});
     c.reached_tolerance = true;
+    c.stop_reason = "every element";
     return c;
 }
 
@@ -151,6 +152,7 @@ void Cubature::save(h5::File& f) const
     f.set_attribute("/", "cubature.training_poses", (long long)training_poses);
     f.set_attribute("/", "cubature.seconds", seconds);
     f.set_attribute("/", "cubature.reached_tolerance", (long long)(reached_tolerance ? 1 : 0));
+    f.set_attribute("/", "cubature.stop_reason", stop_reason);
 }
 
 Cubature Cubature::load(const h5::File& f, const PhysicsModel& model)
@@ -177,6 +179,7 @@ Cubature Cubature::load(const h5::File& f, const PhysicsModel& model)
     c.training_poses = int(f.attribute_int("/", "cubature.training_poses"));
     c.seconds = f.attribute_double("/", "cubature.seconds");
     c.reached_tolerance = f.attribute_int("/", "cubature.reached_tolerance") != 0;
+    c.stop_reason = f.attribute_string("/", "cubature.stop_reason");
     return c;
 }
 
@@ -232,28 +235,46 @@ Cubature train_cubature(const PhysicsModel& model, const PcaSplitDecoder& decode
     std::vector<Index> pool(size_t(index.total()));
     std::iota(pool.begin(), pool.end(), Index(0));
     double error = 1.0;
-    while (error > options.tolerance && Index(selected.size()) < options.max_elements &&
-           Index(selected.size()) < index.total()) {
+    result.stop_reason = "tolerance";
+    while (error > options.tolerance) {
+        if (Index(selected.size()) >= options.max_elements) {
+            result.stop_reason = "element cap";
+            break;
+        }
+        if (Index(selected.size()) >= index.total()) {
+            result.stop_reason = "every element";
+            break;
+        }
         // A random subset of the unselected elements (partial Fisher–Yates on the pool).
         pool.erase(std::remove_if(pool.begin(), pool.end(), [&](Index g) { return is_selected[size_t(g)] != 0; }),
                    pool.end());
-        const Index m = std::min<Index>(options.candidates, Index(pool.size()));
+        Index m = std::min<Index>(options.candidates, Index(pool.size()));
         for (Index k = 0; k < m; ++k) std::swap(pool[size_t(k)], pool[size_t(k + rng.index(Index(pool.size()) - k))]);
-        VectorXd scores(m);
-#pragma omp parallel
-        {
-            VectorXd a(rows);
-#pragma omp for schedule(dynamic, 8)
-            for (Index k = 0; k < m; ++k) {
-                const auto [term, e] = index.locate(pool[size_t(k)]);
-                system.column(term, e, a);
-                const double n = a.norm();
-                scores[k] = n > 0.0 ? a.dot(r) / n : -1.0;
-            }
-        }
+        // Score the first m of the pool; if none of the random subset correlates positively
+        // with the residual, score every remaining element once before giving up.
+        VectorXd scores;
         Index best = 0;
-        scores.maxCoeff(&best);
-        if (!(scores[best] > 0.0)) break;  // nothing left that reduces the residual
+        for (int pass = 0; pass < 2; ++pass) {
+            scores.resize(m);
+#pragma omp parallel
+            {
+                VectorXd a(rows);
+#pragma omp for schedule(dynamic, 8)
+                for (Index k = 0; k < m; ++k) {
+                    const auto [term, e] = index.locate(pool[size_t(k)]);
+                    system.column(term, e, a);
+                    const double n = a.norm();
+                    scores[k] = n > 0.0 ? a.dot(r) / n : -1.0;
+                }
+            }
+            scores.maxCoeff(&best);
+            if (scores[best] > 0.0 || m == Index(pool.size())) break;
+            m = Index(pool.size());
+        }
+        if (!(scores[best] > 0.0)) {  // nothing left that reduces the residual
+            result.stop_reason = "no correlated element";
+            break;
+        }
         const Index g = pool[size_t(best)];
         const auto [term, e] = index.locate(g);
         VectorXd a(rows);

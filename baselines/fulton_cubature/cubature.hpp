@@ -62,12 +62,16 @@ struct Cubature {
     int training_poses = 0;       ///< poses used (after skipping force-free ones)
     double seconds = 0.0;         ///< training wall-clock time
     bool reached_tolerance = false;
+    /// Why the greedy loop stopped: "tolerance", "element cap" (max_elements selected, some
+    /// possibly at weight 0 and dropped), "no correlated element" or "every element".
+    std::string stop_reason;
 
     /// Every element of every elastic term at unit weight: E exactly (for tests).
     static Cubature all_elements(const PhysicsModel& model);
     /// Into an open file: datasets cubature.terms, cubature.elements (int), cubature.weights;
     /// attributes cubature.format "latentbench.cubature/1", cubature.training_error,
-    /// cubature.training_poses, cubature.seconds, cubature.reached_tolerance (0/1).
+    /// cubature.training_poses, cubature.seconds, cubature.reached_tolerance (0/1),
+    /// cubature.stop_reason.
     void save(h5::File& file) const;
     /// IoError naming the file if it holds no cubature or an element does not exist in `model`.
     static Cubature load(const h5::File& file, const PhysicsModel& model);

@@ -276,6 +276,26 @@ StepTiming FultonIntegrator::step(const BoundaryState& bc)
         summary = minimize_lbfgs(objective, y, m_lbfgs, &m_workspace);
     }
     VectorXd z = objective.latent(y);
+    if (!summary.converged() && summary.termination != SolveTermination::NonFinite &&
+        summary.termination != SolveTermination::MaxEvaluations && z.allFinite()) {
+        // NLopt gave up (typically its first line search: the preconditioner of an earlier
+        // state is off here): once more from the best point, with the curvature there.
+        VectorXd x(m_c.size());
+        x = m_c;
+        x.noalias() += m_split.basis() * m_split.inner(z);
+        update_preconditioner(z, x);
+        m_z_start = z;
+        y.setZero();
+        const SolveSummary first = summary;
+        summary = minimize_lbfgs(objective, y, m_lbfgs, &m_workspace);
+        summary.iterations += first.iterations;
+        summary.evaluations += first.evaluations;
+        summary.seconds += first.seconds;
+        summary.message = "retried with a fresh preconditioner after: " + to_string(first.termination) +
+                          (first.message.empty() ? "" : " (" + first.message + ")") +
+                          (summary.message.empty() ? "" : "; " + summary.message);
+        z = objective.latent(y);
+    }
     const bool blown_up = summary.termination == SolveTermination::NonFinite || !z.allFinite();
     VectorXd s = blown_up ? VectorXd::Constant(m_split.pca_dim(), kNaN) : m_split.inner(z);
     if (blown_up) z.setConstant(kNaN);

@@ -27,7 +27,8 @@
 // reduced Hessian at a recent state: H_s = UᵀMU/h² + Σ_e w_e U_eᵀ[∇²E_e]₊U_e (element
 // Hessians projected to PSD; every element for fulton_full) + 2 w_bc U_BᵀU_B. It is
 // computed at reset() and every `preconditioner_refresh` steps (a fixed linear change of
-// variables within a step; L-BFGS itself is untouched). Converged when
+// variables within a step; L-BFGS itself is untouched), and again at the best point when
+// NLopt gives up on a step (one retry, its counts added to the step's summary). Converged when
 //   ‖∇_yΦ‖ = ‖Pᵀ∇_zΦ‖ ≤ gradient_tolerance · √(force scale · length scale),
 // ½‖∇_yΦ‖² being the predicted energy decrease left (a Newton decrement), in J.
 // Every step's SolveSummary is kept; a step that did not converge is counted and the first

@@ -94,10 +94,9 @@ public:
         const MatrixXd heldout = thinned(reconstructions(ae, *in.data, false), m_cubature_options.max_poses);
         const CubatureAccuracy acc =
             heldout.cols() > 0 ? cubature_accuracy(*in.model, split, cubature, heldout) : CubatureAccuracy{kNaN, kNaN};
-        log_info("fulton_cubature: %zu elements, training force error %.4f (%s), held-out force error %.4f, energy "
-                 "error %.4f on %ld poses, %.2f s",
-                 cubature.elements.size(), cubature.training_error,
-                 cubature.reached_tolerance ? "tolerance reached" : "element cap reached first", acc.force_error,
+        log_info("fulton_cubature: %zu elements, training force error %.4f (stopped: %s), held-out force error %.4f, "
+                 "energy error %.4f on %ld poses, %.2f s",
+                 cubature.elements.size(), cubature.training_error, cubature.stop_reason.c_str(), acc.force_error,
                  acc.energy_error, long(heldout.cols()), cubature.seconds);
         cubature.save(out);
         out.set_attribute("/", "fulton.heldout_force_error", acc.force_error);

@@ -53,6 +53,7 @@ void check_cubature(const std::string& scene, int frames, int train_frames, doub
     EXPECT_TRUE(c.reached_tolerance) << scene << ": training error " << c.training_error << " with "
                                      << c.elements.size() << " elements";
     EXPECT_LE(c.training_error, tolerance);
+    EXPECT_EQ(c.stop_reason, "tolerance");
     EXPECT_LT(Index(c.elements.size()), total / 2) << "the cubature should be much smaller than the mesh";
     for (const CubatureElement& e : c.elements) EXPECT_GT(e.weight, 0.0);
     // Training error recomputed independently of the greedy loop's residual.
@@ -94,6 +95,8 @@ TEST(Cubature, SaveLoadRoundTripAndBadFiles)
         EXPECT_EQ(back.elements[i].weight, c.elements[i].weight);
     }
     EXPECT_EQ(back.training_error, c.training_error);
+    EXPECT_EQ(back.stop_reason, c.stop_reason);
+    EXPECT_FALSE(c.stop_reason.empty());
     {
         h5::File other = h5::File::create(dir + "/other.h5");
         other.write("x", VectorXd(VectorXd::Zero(3)));
