@@ -1,5 +1,6 @@
 #include "baselines/builtin_methods.hpp"
 
+#include "baselines/fulton_cubature/fulton_method.hpp"
 #include "baselines/linear_pca/linear_pca_method.hpp"
 
 namespace lb {
@@ -10,6 +11,8 @@ const MethodRegistry& builtin_methods()
         MethodRegistry r;
         register_core_methods(r);
         r.add(linear_pca_method());  // one line per method
+        r.add(fulton_cubature_method());
+        r.add(fulton_full_method());
         return r;
     }();
     return registry;
