@@ -123,9 +123,12 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
     t2.title = "Table 2: our step vs one vertex's decoder JVP";
     t2.caption = "Computing JVP = the Jacobian rows of one vertex's three coordinates w.r.t. the latent through "
                  "the float decoder (the least an optimisation-based latent integrator such as Fulton et al. 2019 "
-                 "needs per cubature point and iteration). Paper columns: " + std::string(kPaperCitation) + ", Table 2.";
+                 "needs per cubature point and iteration). 'fulton_cubature (ms)' is that method's measured step in "
+                 "the same run (median per frame: L-BFGS over the latent with cubature, decoding, as rolled out; "
+                 "'—' if the suite does not run it). Paper columns: " + std::string(kPaperCitation) + ", Table 2.";
     t2.columns = {"example", "DOF", "latent", "decoder layers", "integrator layers", "JVP (ms)", "ours (ms)",
-                  "paper decoder layers", "paper integrator layers", "paper JVP (ms)", "paper ours (ms)"};
+                  "fulton_cubature (ms)", "paper decoder layers", "paper integrator layers", "paper JVP (ms)",
+                  "paper ours (ms)"};
     for (const SceneResult& r : scenes) {
         const auto ours = std::find_if(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return m.paper_method; });
         if (ours == r.methods.end()) continue;
@@ -134,6 +137,10 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
                                             [](const MethodResult& m) { return m.method == "full_space"; });
         const TableCell simulation = reference != r.methods.end() ? number(aggregate(reference->summaries).total_ms, 4)
                                                                   : TableCell::missing();
+        const auto fulton = std::find_if(r.methods.begin(), r.methods.end(),
+                                         [](const MethodResult& m) { return m.method == "fulton_cubature"; });
+        const TableCell fulton_ms =
+            fulton != r.methods.end() ? number(aggregate(fulton->summaries).total_ms) : TableCell::missing();
         const PaperTable1Row* p1 = find_paper_table1_row(r.scene_name);
         const PaperTable2Row* p2 = find_paper_table2_row(r.scene_name);
         t1.add_row({r.label, TableCell::integer(r.dofs), TableCell::integer(r.latent), simulation,
@@ -142,7 +149,7 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
                     paper_cell(p1, p1 ? p1->integration_ms : 0), paper_cell(p1, p1 ? p1->decoder_ms : 0),
                     paper_cell(p1, p1 ? p1->total_ms : 0)});
         t2.add_row({r.label, TableCell::integer(r.dofs), TableCell::integer(r.latent), r.decoder_layers, ours->layers,
-                    number(r.jvp_ms), number(s.total_ms),
+                    number(r.jvp_ms), number(s.total_ms), fulton_ms,
                     p2 ? TableCell(format_layers(p2->decoder_layers)) : TableCell::missing(),
                     p2 ? TableCell(format_layers(p2->integrator_layers)) : TableCell::missing(),
                     paper_cell(p2, p2 ? p2->jvp_ms : 0), paper_cell(p2, p2 ? p2->ours_ms : 0)});
