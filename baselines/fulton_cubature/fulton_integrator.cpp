@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <tuple>
 #include <cmath>
 #include <limits>
 
@@ -102,12 +103,7 @@ double FultonIntegrator::mean_evaluations() const
 void FultonIntegrator::reset(const VectorXd& x_prev2, const BoundaryState& bc_prev2, const VectorXd& x_prev,
                              const BoundaryState& bc_prev)
 {
-    MatrixXd X(x_prev.size(), 2);
-    X.col(0) = x_prev2;
-    X.col(1) = x_prev;
-    const MatrixXd Z = m_autoencoder->encode(X);
-    m_z_prev = Z.col(0);
-    m_z = Z.col(1);
+    std::tie(m_z_prev, m_z) = m_autoencoder->encode_pair(x_prev2, x_prev);
     m_s_prev2 = m_split.inner(m_z_prev);
     m_s_prev = m_split.inner(m_z);
     m_t_prev2 = bc_prev2.targets;

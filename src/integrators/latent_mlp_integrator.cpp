@@ -1,5 +1,7 @@
 #include "integrators/latent_mlp_integrator.hpp"
 
+#include <tuple>
+
 #include "core/error.hpp"
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
@@ -94,12 +96,7 @@ LatentMlpIntegrator::LatentMlpIntegrator(std::string name, std::shared_ptr<Autoe
 void LatentMlpIntegrator::reset(const VectorXd& x_prev2, const BoundaryState& bc_prev2, const VectorXd& x_prev,
                                 const BoundaryState& bc_prev)
 {
-    MatrixXd X(x_prev.size(), 2);
-    X.col(0) = x_prev2;
-    X.col(1) = x_prev;
-    const MatrixXd Z = m_autoencoder->encode(X);
-    m_z2 = Z.col(0);
-    m_z1 = Z.col(1);
+    std::tie(m_z2, m_z1) = m_autoencoder->encode_pair(x_prev2, x_prev);
     m_z = m_z1;
     m_p2 = bc_prev2.params;
     m_p1 = bc_prev.params;

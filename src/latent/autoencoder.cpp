@@ -167,6 +167,15 @@ double Autoencoder::initialize_pca(const MatrixXd& features)
 
 MatrixXd Autoencoder::encode(const MatrixXd& X) { return m_encoder.forward(m_encoding.to_features(X), false); }
 
+std::pair<VectorXd, VectorXd> Autoencoder::encode_pair(const VectorXd& first, const VectorXd& second)
+{
+    MatrixXd X(first.size(), 2);
+    X.col(0) = first;
+    X.col(1) = second;
+    const MatrixXd Z = encode(X);
+    return {Z.col(0), Z.col(1)};
+}
+
 MatrixXd Autoencoder::decode_features(const MatrixXd& Z)
 {
     if (Z.rows() != latent_dim())

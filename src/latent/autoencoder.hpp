@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/rng.hpp"
@@ -82,6 +83,8 @@ public:
     // Evaluation mode (BatchNorm running statistics); columns are frames.
     /// 3N × S positions → latent × S.
     MatrixXd encode(const MatrixXd& X);
+    /// The codes of two states (an integrator's two initial frames), encoded as one batch.
+    std::pair<VectorXd, VectorXd> encode_pair(const VectorXd& first, const VectorXd& second);
     /// latent × S → F × S features.
     MatrixXd decode_features(const MatrixXd& Z);
     /// latent × S and 3B × S Dirichlet targets → 3N × S positions.

@@ -6,6 +6,7 @@
 #include "core/log.hpp"
 #include "latent/autoencoder.hpp"
 #include "scene/scene.hpp"
+#include "support/small_scene.hpp"
 
 namespace lb::testing {
 
@@ -20,14 +21,7 @@ struct FultonProblem {
     FultonProblem(const std::string& scene, int frames, int train_frames, int epochs = 300, Index hidden = 32,
                   Index pca = 12)
     {
-        set_log_level(LogLevel::Quiet);
-        Scene s = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene + ".toml", {"small"});
-        s.sequences.resize(1);
-        s.sequences[0].train_frames = train_frames;
-        SimulateOptions so;
-        so.max_frames = frames;
-        so.progress = false;
-        data = simulate_scene(s, so);
+        data = simulate_small_scene(scene, frames, train_frames);
         model = std::make_unique<PhysicsModel>(data.physics);
         AutoencoderOptions ao;
         ao.latent_dim = 3;

@@ -10,6 +10,7 @@
 #include "io/hdf5.hpp"
 #include "scene/scene.hpp"
 #include "support/finite_difference.hpp"
+#include "support/small_scene.hpp"
 
 namespace lb {
 namespace {
@@ -20,14 +21,7 @@ struct SmallData {
 
     SmallData(const std::string& scene, int frames)
     {
-        set_log_level(LogLevel::Quiet);
-        Scene s = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene + ".toml", {"small"});
-        s.sequences.resize(1);
-        s.sequences[0].train_frames = frames;
-        SimulateOptions so;
-        so.max_frames = frames;
-        so.progress = false;
-        data = simulate_scene(s, so);
+        data = testing::simulate_small_scene(scene, frames, frames);
         model = std::make_unique<PhysicsModel>(data.physics);
     }
 };

@@ -7,6 +7,7 @@
 #include "core/log.hpp"
 #include "integrators/trainer.hpp"
 #include "scene/scene.hpp"
+#include "support/small_scene.hpp"
 
 namespace lb::testing {
 
@@ -18,13 +19,7 @@ struct TinyProblem {
 
     explicit TinyProblem(const std::string& scene = "cantilever", int frames = 24, Index latent = 3)
     {
-        set_log_level(LogLevel::Quiet);
-        Scene s = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene + ".toml", {"small"});
-        for (auto& seq : s.sequences) seq.train_frames = std::min(seq.train_frames, frames);
-        SimulateOptions so;
-        so.max_frames = frames;
-        so.progress = false;
-        data = simulate_scene(s, so);
+        data = simulate_small_scene(scene, frames);
         model = std::make_unique<PhysicsModel>(data.physics);
         AutoencoderOptions ao;
         ao.latent_dim = latent;
