@@ -260,7 +260,7 @@ def main(argv=None):
                              "(never with a method); auto (default): track if the set travels further than half "
                              "the object's size")
     parser.add_argument("--no-ghost", action="store_true", help="no ground-truth ghost behind the methods")
-    parser.add_argument("--title", default=None, help="title (default: scene and sequence)")
+    parser.add_argument("--title", default=None, help="title, followed by the sequence (default: the scene)")
     args = parser.parse_args(argv)
     if args.max_frames < 2:
         pc.fail("--max-frames must be at least 2")
@@ -335,7 +335,7 @@ def main(argv=None):
         colour = "0.6" if i == 0 else colours[label]
         panels.append(Panel(fig, cell, geometry, colour, lo, hi, args.view, zoom, label,
                             "black" if i == 0 else colours[label], ghost=(i > 0 and not args.no_ghost)))
-    title = args.title if args.title is not None else " · ".join(s for s in (dataset.scene, name) if s)
+    title = " · ".join(s for s in (args.title if args.title is not None else dataset.scene, name) if s)
     legend = "red dots: Dirichlet targets" if geometry.bc_as_dots else "red: Dirichlet set"
     fig.text(0.01, 1.0 - 0.08 / fig_h, title, ha="left", va="top", fontsize=11, fontweight="bold")
     camera = "camera follows the Dirichlet set" if track else "fixed camera"
