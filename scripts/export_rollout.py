@@ -24,7 +24,8 @@ Cells keep the element type of the dataset: tetrahedra (solids), triangles
 time of frame t is t * dt seconds (the dataset's dt), so ParaView's time shows
 seconds; the frame number is time / dt. A rollout that diverged (non-finite
 positions from some frame on) is exported up to its last finite frame, with a
-note on stderr. `--ground-truth` also exports the ground truth of the
+note on stderr; finite frames after the stable horizon are exported as they are
+(a note names the horizon). `--ground-truth` also exports the ground truth of the
 rollouts' sequences (series `ground_truth_<sequence>`); with no rollout file
 it exports the ground truth of --sequence (default: every sequence).
 
@@ -188,6 +189,10 @@ def collect_series(dataset, rollout_paths, sequence_arg, ground_truth):
         if finite < len(x):
             print(f"export_rollout.py: note: {r.method} on {r.sequence} is non-finite from frame {finite} on; "
                   f"exporting frames 0-{finite - 1}", file=sys.stderr)
+        horizon = int(r.attrs.get("stable_horizon", len(x)))
+        if horizon < finite:
+            print(f"export_rollout.py: note: {r.method} on {r.sequence} diverged at frame {horizon} (stable "
+                  "horizon); its later frames are exported as they are", file=sys.stderr)
         series.append(Series(pc.safe_name(f"{r.label}_{r.sequence}"), x[:finite], x_gt,
                              f"{r.label} on {r.sequence}"))
     if ground_truth or not rollout_paths:
