@@ -44,62 +44,6 @@ MAX_BC_DOTS = 48
 BC_TINT = np.array(to_rgb("#d62728"))
 
 
-class Dataset:
-    def __init__(self, path):
-        with pc.open_h5(path) as f:
-            for required in ("rest_positions", "elements", "sequences"):
-                if required not in f:
-                    raise pc.InputError(f"'{path}' is not a latentbench dataset (no '{required}')")
-            try:
-                self.path = path
-                self.rest = np.asarray(f["rest_positions"][...], dtype=float)
-                self.elements = np.asarray(f["elements"][...], dtype=np.int64)
-                self.object = pc.as_str(f.attrs["object"]) if "object" in f.attrs else ""
-                self.scene = pc.as_str(f.attrs["scene"]) if "scene" in f.attrs else ""
-                self.bc_indices = (np.asarray(f["bc/indices"][...], dtype=np.int64).reshape(-1)
-                                   if "bc/indices" in f else np.zeros(0, dtype=np.int64))
-                keys = sorted(f["sequences"].keys(), key=lambda k: (0, int(k)) if k.isdigit() else (1, k))
-                self.sequences = [(k, pc.as_str(f["sequences"][k].attrs.get("name", k))) for k in keys]
-            except (KeyError, OSError, ValueError, TypeError) as exc:
-                raise pc.InputError(f"'{path}' is corrupt or not a latentbench dataset ({exc})") from None
-        if self.rest.ndim != 2 or self.rest.shape[1] != 3:
-            raise pc.InputError(f"'{path}': rest_positions has shape {self.rest.shape}, expected N x 3")
-        if self.elements.ndim != 2 or self.elements.shape[1] not in (2, 3, 4):
-            raise pc.InputError(f"'{path}': elements has shape {self.elements.shape}, expected M x 2/3/4")
-        if self.elements.size and (self.elements.min() < 0 or self.elements.max() >= len(self.rest)):
-            raise pc.InputError(f"'{path}': element indices out of range for {len(self.rest)} vertices")
-
-    def find_sequence(self, name):
-        """(key, name) of a sequence given by name or by group index."""
-        for key, seq_name in self.sequences:
-            if name in (key, seq_name):
-                return key, seq_name
-        names = ", ".join(n for _, n in self.sequences)
-        raise pc.InputError(f"'{self.path}' has no sequence '{name}' (sequences: {names})")
-
-    def ground_truth(self, key):
-        """Positions (T x N x 3) and Dirichlet targets (T x B x 3) of one sequence."""
-        with pc.open_h5(self.path) as f:
-            try:
-                g = f["sequences"][key]
-                positions = np.asarray(g["positions"][...], dtype=float)
-                targets = np.asarray(g["bc_positions"][...], dtype=float) if "bc_positions" in g else None
-            except (KeyError, OSError, ValueError, TypeError) as exc:
-                raise pc.InputError(f"'{self.path}': cannot read sequences/{key} ({exc})") from None
-        if positions.ndim == 2:
-            positions = positions.reshape(positions.shape[0], -1, 3)
-        if positions.ndim != 3 or positions.shape[1:] != self.rest.shape:
-            raise pc.InputError(f"'{self.path}': sequences/{key}/positions has shape {positions.shape}, "
-                                f"expected T x {len(self.rest)} x 3")
-        if targets is not None:
-            targets = targets.reshape(targets.shape[0], -1, 3)
-            if targets.shape[1] != len(self.bc_indices):
-                targets = None
-        if targets is None:
-            targets = positions[:, self.bc_indices, :]
-        return positions, targets
-
-
 def boundary_faces(tets):
     """Triangles of a tet mesh that belong to exactly one tet (its surface)."""
     faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 3, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 1]]])
@@ -286,7 +230,7 @@ def main(argv=None):
     pc.require_h5py()
 
     try:
-        dataset = Dataset(args.dataset)
+        dataset = pc.Dataset(args.dataset)
         rollouts = pc.load_all_rollouts(args.rollouts)
         if rollouts:
             key, name, shown = select_rollouts(rollouts, dataset, args.sequence)

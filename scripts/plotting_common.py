@@ -1,4 +1,4 @@
-"""Shared helpers of latentbench's plotting scripts (plot_rollouts.py, plot_filmstrip.py).
+"""Shared helpers of latentbench's scripts (plot_rollouts.py, plot_filmstrip.py, plot_video.py, export_rollout.py).
 
 Reads the HDF5 files written by ``latentbench rollout`` and ``latentbench simulate``
 with h5py and sets up matplotlib with the non-interactive Agg backend. Run the
@@ -11,8 +11,9 @@ Rollout file layout (src/eval/rollout.cpp, save_rollouts):
                attrs method, sequence, frames, stable_horizon, ke_ratio, ...
 Dataset file layout (src/sim/dataset.cpp):
   rest_positions (N x 3), elements (M x K: 2 rods, 3 triangles, 4 tets),
-  bc/indices (B), sequences/<k>/positions (T x N x 3), sequences/<k>/bc_positions
-  (T x B x 3); attrs object, scene; sequences/<k> attrs name, train_frames.
+  bc/indices (B), rods (R x V, rods only), sequences/<k>/positions (T x N x 3),
+  sequences/<k>/bc_positions (T x B x 3); attrs object, scene, dt; sequences/<k>
+  attrs name, train_frames.
 """
 import os
 import re
@@ -172,6 +173,68 @@ def load_all_rollouts(paths):
         if counts[(r.method, r.sequence)] > 1:
             r.label = f"{r.method} ({os.path.splitext(os.path.basename(r.path))[0]})"
     return rollouts
+
+
+class Dataset:
+    """A dataset written by `latentbench simulate`: the mesh, the Dirichlet set and the
+    sequences' names; positions are read per sequence on demand."""
+
+    def __init__(self, path):
+        with open_h5(path) as f:
+            for required in ("rest_positions", "elements", "sequences"):
+                if required not in f:
+                    raise InputError(f"'{path}' is not a latentbench dataset (no '{required}')")
+            try:
+                self.path = path
+                self.rest = np.asarray(f["rest_positions"][...], dtype=float)
+                self.elements = np.asarray(f["elements"][...], dtype=np.int64)
+                self.object = as_str(f.attrs["object"]) if "object" in f.attrs else ""
+                self.scene = as_str(f.attrs["scene"]) if "scene" in f.attrs else ""
+                self.bc_indices = (np.asarray(f["bc/indices"][...], dtype=np.int64).reshape(-1)
+                                   if "bc/indices" in f else np.zeros(0, dtype=np.int64))
+                keys = sorted(f["sequences"].keys(), key=lambda k: (0, int(k)) if k.isdigit() else (1, k))
+                self.sequences = [(k, as_str(f["sequences"][k].attrs.get("name", k))) for k in keys]
+                self.train_frames = {k: int(f["sequences"][k].attrs.get("train_frames", 0)) for k in keys}
+                self.dt = float(f.attrs["dt"]) if "dt" in f.attrs else 1.0 / 30.0
+                self.rods = np.asarray(f["rods"][...], dtype=np.int64) if "rods" in f else None
+            except (KeyError, OSError, ValueError, TypeError) as exc:
+                raise InputError(f"'{path}' is corrupt or not a latentbench dataset ({exc})") from None
+        if self.rest.ndim != 2 or self.rest.shape[1] != 3:
+            raise InputError(f"'{path}': rest_positions has shape {self.rest.shape}, expected N x 3")
+        if self.elements.ndim != 2 or self.elements.shape[1] not in (2, 3, 4):
+            raise InputError(f"'{path}': elements has shape {self.elements.shape}, expected M x 2/3/4")
+        if self.elements.size and (self.elements.min() < 0 or self.elements.max() >= len(self.rest)):
+            raise InputError(f"'{path}': element indices out of range for {len(self.rest)} vertices")
+
+    def find_sequence(self, name):
+        """(key, name) of a sequence given by name or by group index."""
+        for key, seq_name in self.sequences:
+            if name in (key, seq_name):
+                return key, seq_name
+        names = ", ".join(n for _, n in self.sequences)
+        raise InputError(f"'{self.path}' has no sequence '{name}' (sequences: {names})")
+
+    def ground_truth(self, key):
+        """Positions (T x N x 3) and Dirichlet targets (T x B x 3) of one sequence."""
+        with open_h5(self.path) as f:
+            try:
+                g = f["sequences"][key]
+                positions = np.asarray(g["positions"][...], dtype=float)
+                targets = np.asarray(g["bc_positions"][...], dtype=float) if "bc_positions" in g else None
+            except (KeyError, OSError, ValueError, TypeError) as exc:
+                raise InputError(f"'{self.path}': cannot read sequences/{key} ({exc})") from None
+        if positions.ndim == 2:
+            positions = positions.reshape(positions.shape[0], -1, 3)
+        if positions.ndim != 3 or positions.shape[1:] != self.rest.shape:
+            raise InputError(f"'{self.path}': sequences/{key}/positions has shape {positions.shape}, "
+                             f"expected T x {len(self.rest)} x 3")
+        if targets is not None:
+            targets = targets.reshape(targets.shape[0], -1, 3)
+            if targets.shape[1] != len(self.bc_indices):
+                targets = None
+        if targets is None:
+            targets = positions[:, self.bc_indices, :]
+        return positions, targets
 
 
 def colour_map(labels):

@@ -10,7 +10,7 @@
 //   stage_cache.hpp                           keys, --force, stale checkpoints
 //   run_experiment.cpp                        stage execution per scene
 //   report.hpp                                tables from the rollout files
-//   plots.hpp                                 figures (Python scripts, fork/exec)
+//   plots.hpp                                 figures and videos (Python scripts, posix_spawn)
 #include <cstdint>
 #include <memory>
 #include <set>
@@ -63,6 +63,10 @@ struct ExperimentConfig {
     bool plots = true;
     bool filmstrips = true;
     bool paper_tables = true;
+    /// One side-by-side MP4 per scene (scripts/plot_video.py; needs Debian's ffmpeg).
+    bool videos = false;
+    /// Longest video in frames (30 fps): longer sequences are subsampled.
+    int video_frames = 450;
     std::vector<AblationSpec> ablations;
 };
 
@@ -82,6 +86,7 @@ struct RunResult {
     std::string run_dir;
     std::vector<std::string> tables;   ///< Markdown paths
     std::vector<std::string> figures;  ///< PNG paths
+    std::vector<std::string> videos;   ///< MP4 paths (one per scene with `[outputs] videos`)
     int stages_run = 0;
     int stages_cached = 0;
     double seconds = 0.0;

@@ -122,7 +122,7 @@ AblationSpec read_ablation(ConfigTable a, const std::set<std::string>& names)
 
 const std::vector<std::string>& experiment_stages()
 {
-    static const std::vector<std::string> stages{"simulate", "autoencoder", "integrators", "rollouts", "tables", "plots"};
+    static const std::vector<std::string> stages{"simulate", "autoencoder", "integrators", "rollouts", "tables", "plots", "videos"};
     return stages;
 }
 
@@ -174,6 +174,8 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
         ex.plots = t->get_bool("plots", ex.plots);
         ex.filmstrips = t->get_bool("filmstrips", ex.filmstrips);
         ex.paper_tables = t->get_bool("paper_tables", ex.paper_tables);
+        ex.videos = t->get_bool("videos", ex.videos);
+        ex.video_frames = t->get_count("video_frames", ex.video_frames, 2, 100000);
         t->finish();
     }
     for (ConfigTable a : cfg.table_array("ablations")) ex.ablations.push_back(read_ablation(a, names));

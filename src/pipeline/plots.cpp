@@ -13,6 +13,7 @@ namespace lb {
 namespace {
 
 constexpr const char* kPython = "/usr/bin/python3";  // Debian's: it sees python3-matplotlib and python3-h5py
+constexpr const char* kFfmpeg = "/usr/bin/ffmpeg";   // matplotlib's FFMpegWriter runs it
 
 std::string script(const std::string& name) { return std::string(LB_SOURCE_DIR) + "/scripts/" + name; }
 
@@ -24,6 +25,22 @@ void run_or_throw(const std::vector<std::string>& argv, const ProcessOptions& io
 }
 
 } // namespace
+
+void video_scene(const SceneResult& r, const VideoOptions& options)
+{
+    if (!std::filesystem::exists(kPython))
+        throw Error(std::string("videos need ") + kPython + " with matplotlib, h5py and numpy (scripts/run setup installs them)");
+    if (!std::filesystem::exists(kFfmpeg))
+        throw Error(std::string("[outputs] videos = true needs ") + kFfmpeg +
+                    " (Debian package ffmpeg; scripts/run setup installs it), or set videos = false");
+    std::filesystem::create_directories(std::filesystem::path(options.output).parent_path());
+    std::vector<std::string> argv{kPython, script("plot_video.py"), r.dataset_file};
+    for (const auto& m : r.methods) {
+        if (m.method != "full_space") argv.push_back(m.rollout_file);
+    }
+    argv.insert(argv.end(), {"-o", options.output, "--title", r.label, "--max-frames", std::to_string(options.max_frames)});
+    run_or_throw(argv, {options.log_path, options.log_path, /*append_stdout=*/true}, "video of " + r.label, options.log_path);
+}
 
 std::vector<std::string> plot_scene(const SceneResult& r, const PlotOptions& options)
 {

@@ -29,6 +29,7 @@ struct MethodResult {
     std::string layers;   ///< Method::layers()
     bool paper_method = false;
     std::string rollout_file;
+    std::string rollout_key;  ///< the rollout stage's cache key (covers every input of the rollout)
     std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence (and seed)
     /// With a suite's `seeds`: the seeds, and per seed the summary over its sequences.
     std::vector<std::uint64_t> seeds;

@@ -224,6 +224,7 @@ private:
         mr.budgets.push_back(method.has_artefact() ? read_budget(artefact) : TrainingBudget{});
         const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames) +
                                               "|format " + std::to_string(kRolloutFormatVersion));
+        mr.rollout_key = rkey;
         m_cache.run("rollouts", m_spec.label + ": rollout '" + stem + "'", mr.rollout_file, rkey, [&] {
             std::unique_ptr<Integrator> integrator;
             if (method.has_artefact()) {
@@ -287,6 +288,21 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
             result.figures.insert(result.figures.end(), f.begin(), f.end());
         }
         log_info("[plots] %zu figures in %s", result.figures.size(), po.figures_dir.c_str());
+    }
+    if (ex.videos) {
+        // A cached stage: the key covers every method's rollout (and so everything before
+        // it) and the video length; --force videos redraws.
+        for (const SceneResult& r : scenes) {
+            VideoOptions vo;
+            vo.output = result.run_dir + "/videos/" + r.label + ".mp4";
+            vo.log_path = result.run_dir + "/run.log";
+            vo.max_frames = ex.video_frames;
+            std::string key = "video|" + std::to_string(vo.max_frames);
+            for (const MethodResult& m : r.methods) key += "|" + m.name + "=" + m.rollout_key;
+            cache.run("videos", r.label + ": video", vo.output, fnv1a64_hex(key), [&] { video_scene(r, vo); });
+            result.videos.push_back(vo.output);
+        }
+        log_info("[videos] %zu videos in %s/videos", result.videos.size(), result.run_dir.c_str());
     }
     result.stages_run = cache.ran();
     result.stages_cached = cache.cached();

@@ -159,6 +159,40 @@ TEST(Experiment, SecondRunReusesEveryStageAndForceRedoesOne)
     EXPECT_THROW(run_experiment(ex, options), ConfigError);
 }
 
+// Videos (issue 16): `[outputs] videos = true` writes one MP4 per scene into videos/,
+// cached like a stage keyed on the rollouts; off by default; bad video_frames refused.
+TEST(Experiment, VideosSwitchWritesOneMp4PerSceneAndCachesIt)
+{
+    if (!fs::exists("/usr/bin/ffmpeg")) GTEST_SKIP() << "ffmpeg not installed (Debian package ffmpeg)";
+    set_log_level(LogLevel::Quiet);
+    std::string text = kTiny;
+    text.replace(text.find("plots = false"), 13, "plots = false\nvideos = true\nvideo_frames = 12");
+    const std::string path = write_experiment("videos", text);
+    const ExperimentConfig ex = load_experiment(path, builtin_methods());
+    EXPECT_TRUE(ex.videos);
+    EXPECT_EQ(ex.video_frames, 12);
+    EXPECT_FALSE(load_experiment(write_experiment("videos_default", kTiny), builtin_methods()).videos);
+    RunOptions options;
+    options.output_dir = fs::path(path).parent_path().string() + "/run";
+    const RunResult first = run_experiment(ex, options);
+    EXPECT_EQ(first.stages_run, 10);  // the 9 of the tiny suite and one video
+    ASSERT_EQ(first.videos.size(), 1u);
+    EXPECT_EQ(first.videos[0], options.output_dir + "/videos/cantilever_small.mp4");
+    EXPECT_GT(fs::file_size(first.videos[0]), 1000u);
+
+    const RunResult second = run_experiment(ex, options);
+    EXPECT_EQ(second.stages_run, 0);
+    EXPECT_EQ(second.stages_cached, 10);
+    options.force = {"videos"};
+    EXPECT_EQ(run_experiment(ex, options).stages_run, 1);
+
+    for (const char* bad : {"video_frames = 1", "video_frames = 0", "videos = 1"}) {
+        std::string t = kTiny;
+        t.replace(t.find("plots = false"), 13, std::string("plots = false\n") + bad);
+        EXPECT_THROW(load_experiment(write_experiment("bad_videos", t), builtin_methods()), ConfigError) << bad;
+    }
+}
+
 std::string read_all(const std::string& path);
 
 // Seeds (issue 10): every learned method is fitted and rolled out once per seed, methods
