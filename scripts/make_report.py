@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Publish experiment results and assemble the paper report's tables.
 
-  make_report.py publish RUN_DIR NAME   copy RUN_DIR/tables/* and RUN_DIR/figures/**/*.png into
+  make_report.py publish RUN_DIR NAME   copy RUN_DIR/tables/*, RUN_DIR/figures/**/*.png and RUN_DIR/videos/*.mp4 into
                                         results/NAME/ (the committed reference results)
   make_report.py tables                 write paper/tables.md: every results/*/tables/*.md, Tables 1
                                         and 2 first, then method comparisons, then ablations
@@ -38,10 +38,18 @@ def publish(run_dir, name):
                 os.makedirs(os.path.dirname(dst), exist_ok=True)
                 shutil.copy2(os.path.join(folder, f), dst)
                 count += 1
+    videos = os.path.join(run_dir, "videos")
+    video_count = 0
+    if os.path.isdir(videos):
+        for f in sorted(os.listdir(videos)):
+            if f.endswith(".mp4"):
+                os.makedirs(os.path.join(out, "videos"), exist_ok=True)
+                shutil.copy2(os.path.join(videos, f), os.path.join(out, "videos", f))
+                video_count += 1
     for extra in ("experiment.toml",):
         if os.path.exists(os.path.join(run_dir, extra)):
             shutil.copy2(os.path.join(run_dir, extra), out)
-    print(f"published {run_dir} -> {out} ({len(os.listdir(os.path.join(out, 'tables')))} table files, {count} figures)")
+    print(f"published {run_dir} -> {out} ({len(os.listdir(os.path.join(out, 'tables')))} table files, {count} figures, {video_count} videos)")
 
 
 def order(name):
