@@ -395,9 +395,26 @@ TEST(MinimizeLbfgs, NonFiniteObjectiveIsReportedNotThrown)
     EXPECT_EQ(x, VectorXd::Ones(3)) << "no finite point was seen: x stays the start";
 }
 
+/// Rosenbrock, recording the lowest value any evaluation saw.
+class RecordingRosenbrock final : public Objective {
+public:
+    double lowest = std::numeric_limits<double>::infinity();
+    Index dimension() const override { return 2; }
+    double value(const Eigen::Ref<const VectorXd>& p) override { return record(m_f.value(p)); }
+    void gradient(const Eigen::Ref<const VectorXd>& p, Eigen::Ref<VectorXd> g) override { m_f.gradient(p, g); }
+
+private:
+    Rosenbrock m_f;
+    double record(double v)
+    {
+        lowest = std::min(lowest, v);
+        return v;
+    }
+};
+
 TEST(MinimizeLbfgs, EvaluationCapIsReported)
 {
-    Rosenbrock f;
+    RecordingRosenbrock f;
     VectorXd x(2);
     x << -1.2, 1.0;
     LbfgsOptions o;
@@ -406,10 +423,11 @@ TEST(MinimizeLbfgs, EvaluationCapIsReported)
     EXPECT_EQ(s.termination, SolveTermination::MaxEvaluations) << s.brief();
     EXPECT_EQ(s.evaluations, 5);
     EXPECT_FALSE(s.converged());
+    // Whether five evaluations find a point below the start depends on the last bits of
+    // the line search (they do at -O3, not under the sanitizers' -O1); what must hold is
+    // that the point returned is the lowest one seen.
     Rosenbrock fresh;
-    VectorXd start(2);
-    start << -1.2, 1.0;
-    EXPECT_LT(fresh.value(x), fresh.value(start)) << "x is the lowest point seen";
+    EXPECT_EQ(fresh.value(x), f.lowest) << "x is the lowest point seen";
 }
 
 TEST(SolveSummary, EveryTerminationHasItsOwnName)
