@@ -213,6 +213,31 @@ def select_rollouts(rollouts, dataset, sequence_arg):
     return key, name, [r for r in chosen if r.has_positions()]
 
 
+def load_scene_rollouts(dataset_path, rollout_paths, sequence):
+    """The dataset, the chosen sequence's key and name, ground truth and Dirichlet targets, and the
+    rollouts shown with their positions (each checked against the dataset's vertex count).
+    Exits with an error line on bad input (pc.fail)."""
+    try:
+        dataset = pc.Dataset(dataset_path)
+        rollouts = pc.load_all_rollouts(rollout_paths)
+        if rollouts:
+            key, name, shown = select_rollouts(rollouts, dataset, sequence)
+        else:
+            key, name = dataset.find_sequence(sequence) if sequence else dataset.sequences[0]
+            shown = []
+        gt, targets = dataset.ground_truth(key)
+        predictions = []
+        for r in shown:
+            x = r.positions()
+            if x.shape[1] != gt.shape[1]:
+                raise pc.InputError(f"'{r.path}': {r.method} on {name} has {x.shape[1]} vertices, the dataset "
+                                    f"'{dataset_path}' {gt.shape[1]}: not the same scene/variant")
+            predictions.append(x)
+    except pc.InputError as exc:
+        pc.fail(str(exc))
+    return dataset, key, name, gt, targets, shown, predictions
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
@@ -229,24 +254,7 @@ def main(argv=None):
         pc.fail("--frames must be at least 1")
     pc.require_h5py()
 
-    try:
-        dataset = pc.Dataset(args.dataset)
-        rollouts = pc.load_all_rollouts(args.rollouts)
-        if rollouts:
-            key, name, shown = select_rollouts(rollouts, dataset, args.sequence)
-        else:
-            key, name = dataset.find_sequence(args.sequence) if args.sequence else dataset.sequences[0]
-            shown = []
-        gt, targets = dataset.ground_truth(key)
-        predictions = []
-        for r in shown:
-            x = r.positions()
-            if x.shape[1] != gt.shape[1]:
-                raise pc.InputError(f"'{r.path}': {r.method} on {name} has {x.shape[1]} vertices, the dataset "
-                                    f"'{args.dataset}' {gt.shape[1]}: not the same scene/variant")
-            predictions.append(x)
-    except pc.InputError as exc:
-        pc.fail(str(exc))
+    dataset, _, name, gt, targets, shown, predictions = load_scene_rollouts(args.dataset, args.rollouts, args.sequence)
 
     num_frames = min([len(gt)] + [len(x) for x in predictions]) if predictions else len(gt)
     frames = np.unique(np.linspace(0, num_frames - 1, min(args.frames, num_frames)).round().astype(int))

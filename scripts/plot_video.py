@@ -272,24 +272,8 @@ def main(argv=None):
         pc.fail("ffmpeg is not installed (Debian package ffmpeg; scripts/run setup installs it)")
     pc.plt.rcParams["animation.ffmpeg_path"] = ffmpeg
 
-    try:
-        dataset = pc.Dataset(args.dataset)
-        rollouts = pc.load_all_rollouts(args.rollouts)
-        if rollouts:
-            key, name, shown = fs.select_rollouts(rollouts, dataset, args.sequence)
-        else:
-            key, name = dataset.find_sequence(args.sequence) if args.sequence else dataset.sequences[0]
-            shown = []
-        gt, targets = dataset.ground_truth(key)
-        predictions = []
-        for r in shown:
-            x = r.positions()
-            if x.shape[1] != gt.shape[1]:
-                raise pc.InputError(f"'{r.path}': {r.method} on {name} has {x.shape[1]} vertices, the dataset "
-                                    f"'{args.dataset}' {gt.shape[1]}: not the same scene/variant")
-            predictions.append(x)
-    except pc.InputError as exc:
-        pc.fail(str(exc))
+    dataset, key, name, gt, targets, shown, predictions = fs.load_scene_rollouts(args.dataset, args.rollouts,
+                                                                                 args.sequence)
 
     num_frames = min([len(gt)] + [len(x) for x in predictions])
     stride = max(args.every, int(math.ceil(num_frames / args.max_frames)))
