@@ -1,5 +1,6 @@
 // methods, fit, rollout, evaluate: every method through the registry.
 #include <cstdio>
+#include <algorithm>
 #include <filesystem>
 
 #include "baselines/builtin_methods.hpp"
@@ -8,6 +9,7 @@
 #include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/parse.hpp"
+#include "eval/diagnose.hpp"
 #include "eval/rollout.hpp"
 #include "io/atomic_file.hpp"
 #include "eval/summary_schema.hpp"
@@ -193,6 +195,69 @@ void register_evaluate(CLI::App& app)
         print_summary_header();
         for (const auto& path : *files) {
             for (const RolloutRecord& r : load_rollout_summaries(path)) print_summary(r.method, r.sequence, r.summary);
+        }
+    });
+}
+
+void register_diagnose(CLI::App& app)
+{
+    struct Args {
+        std::string data, ae, output, sequences = "all";
+        std::vector<std::string> integrators, rollouts;
+        int stride = 1;
+    };
+    auto a = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand(
+        "diagnose", "Decompose a latent method's error: projection, stored energy, best step, one step, rollout");
+    cmd->add_option("data", a->data, "Dataset HDF5")->required();
+    cmd->add_option("--ae", a->ae, "Autoencoder HDF5 (rows a and b; needed by latent methods)")->required();
+    cmd->add_option("--integrator", a->integrators,
+                    "Artefact HDF5 from `fit` (repeatable): its one-step error from the truth; a fulton_full "
+                    "artefact gives the manifold-optimal step (row c)");
+    cmd->add_option("--rollouts", a->rollouts, "Rollout HDF5 from `rollout` (repeatable): row e");
+    cmd->add_option("--sequences", a->sequences, "all (default), test, or a sequence name");
+    cmd->add_option("--stride", a->stride, "Every stride-th frame (default 1)")->check(CLI::Range(1, 1000000));
+    cmd->add_option("-o,--output", a->output, "Also write the table as OUTPUT.md, .csv and .tex");
+    cmd->callback([a] {
+        if (!a->output.empty()) check_output_path(a->output + ".md", "-o");
+        const MethodRegistry& registry = builtin_methods();
+        const Dataset data = load_dataset(a->data);
+        const PhysicsModel model(data.physics);
+        DiagnoseOptions options;
+        options.sequences = select_sequences(data, a->sequences);
+        options.stride = a->stride;
+        Diagnosis diagnosis(model, data, options);
+        auto autoencoder = std::make_shared<Autoencoder>(Autoencoder::load(a->ae, data.physics));
+        diagnosis.add_autoencoder(*autoencoder);
+        for (const std::string& path : a->integrators) {
+            const h5::File artefact = h5::File::open(path);
+            std::unique_ptr<Method> method = method_from_artefact(registry, artefact);
+            MethodInputs in = command_line_inputs(data, model, *method, a->ae, "diagnose");
+            if (method->needs_autoencoder()) in.autoencoder = autoencoder;
+            method->resolve({data.scene_name, scene_latent(in, data)});
+            const std::string label = std::filesystem::path(path).stem().string();
+            const std::unique_ptr<Integrator> integrator = method->load(in, &artefact, label);
+            log_info("diagnose: one step from the truth with %s (%s)", label.c_str(), method->method_name().c_str());
+            diagnosis.add_one_step(*integrator, method->method_name() == "fulton_full" ? "(c) manifold-optimal step"
+                                                                                     : "(d) one step");
+        }
+        for (const std::string& path : a->rollouts) {
+            std::vector<RolloutRecord> records = load_rollout_summaries(path);
+            // one row per method in the file
+            while (!records.empty()) {
+                const std::string name = records.front().method;
+                std::vector<RolloutRecord> mine;
+                auto it = std::stable_partition(records.begin(), records.end(),
+                                                [&](const RolloutRecord& r) { return r.method == name; });
+                mine.assign(records.begin(), it);
+                records.erase(records.begin(), it);
+                diagnosis.add_rollout(mine);
+            }
+        }
+        const Table table = diagnosis.table(data.scene_name);
+        std::printf("%s", to_markdown(table).c_str());
+        if (!a->output.empty()) {
+            for (const std::string& p : write_table_files(table, a->output)) std::printf("wrote %s\n", p.c_str());
         }
     });
 }

@@ -15,6 +15,7 @@ void register_info(CLI::App& app);
 void register_methods(CLI::App& app);
 void register_fit(CLI::App& app);
 void register_rollout(CLI::App& app);
+void register_diagnose(CLI::App& app);
 void register_evaluate(CLI::App& app);
 void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);

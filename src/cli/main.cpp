@@ -49,6 +49,7 @@ int main(int argc, char** argv)
     lb::cli::register_methods(app);
     lb::cli::register_fit(app);
     lb::cli::register_rollout(app);
+    lb::cli::register_diagnose(app);
     lb::cli::register_evaluate(app);
     lb::cli::register_run(app);
     lb::cli::register_train_ae(app);

@@ -2,6 +2,8 @@
 
 #include "core/parallel.hpp"
 
+#include <omp.h>
+
 #include <vector>
 
 namespace lb {
@@ -36,6 +38,41 @@ void Energy::add_gradient(const VectorXd& x, double weight, VectorXd& g) const
             g.segment<3>(3 * Index(nodes[a])) += weight * Eigen::Map<const Vector3d>(ge + 3 * a);
         }
     }
+}
+
+double Energy::element_value_gradient(Index e, const VectorXd& x, double* g) const
+{
+    element_gradient(e, x, g);
+    return element_value(e, x);
+}
+
+double Energy::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    const Index n = num_elements();
+    const int k = nodes_per_element();
+    const int dofs = 3 * k;
+    auto scatter = [&](Index e, const double* ge) {
+        const int* nodes = element_nodes(e);
+        for (int a = 0; a < k; ++a) g.segment<3>(3 * Index(nodes[a])) += weight * Eigen::Map<const Vector3d>(ge + 3 * a);
+    };
+    double sum = 0.0;
+    if (omp_in_parallel() || n < kParallelElementThreshold) {
+        constexpr int kMaxDofs = 12;
+        Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDofs, 1> ge(dofs);
+        for (Index e = 0; e < n; ++e) {
+            sum += element_value_gradient(e, x, ge.data());
+            scatter(e, ge.data());
+        }
+        return sum;
+    }
+    // As add_gradient: element gradients in parallel, scattered serially.
+    std::vector<double> local(static_cast<size_t>(n * dofs));
+#pragma omp parallel for reduction(+ : sum) schedule(static)
+    for (Index e = 0; e < n; ++e) {
+        sum += element_value_gradient(e, x, local.data() + e * dofs);
+    }
+    for (Index e = 0; e < n; ++e) scatter(e, local.data() + e * dofs);
+    return sum;
 }
 
 VectorXd Energy::gradient(const VectorXd& x) const
@@ -78,6 +115,14 @@ VectorXd EnergySum::gradient(const VectorXd& x) const
     VectorXd g = VectorXd::Zero(x.size());
     for (const auto& term : m_terms) term.energy->add_gradient(x, term.weight, g);
     return g;
+}
+
+double EnergySum::value_gradient(const VectorXd& x, VectorXd& g) const
+{
+    g.setZero(x.size());
+    double sum = 0.0;
+    for (const auto& term : m_terms) sum += term.weight * term.energy->add_value_gradient(x, term.weight, g);
+    return sum;
 }
 
 std::vector<double> EnergySum::term_values(const VectorXd& x) const

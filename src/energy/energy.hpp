@@ -36,6 +36,9 @@ public:
     virtual double element_value(Index e, const VectorXd& x) const = 0;
     /// Writes ∂E_e/∂x_e (3K values) to g.
     virtual void element_gradient(Index e, const VectorXd& x, double* g) const = 0;
+    /// E_e, with ∂E_e/∂x_e written to g, from one evaluation (what they share is computed
+    /// once). Default: element_value then element_gradient.
+    virtual double element_value_gradient(Index e, const VectorXd& x, double* g) const;
     /// Writes ∂²E_e/∂x_e² (3K×3K, column-major) to H, PSD-projected if asked.
     virtual void element_hessian(Index e, const VectorXd& x, bool project_psd, double* H) const = 0;
     /// True if the Hessian is identically zero (e.g. gravity): assembly skips it.
@@ -47,6 +50,11 @@ public:
     void add_gradient(const VectorXd& x, double weight, VectorXd& g) const;
     /// ∇E(x) (3N).
     VectorXd gradient(const VectorXd& x) const;
+    /// Returns E(x) and adds weight · ∇E(x) to g, in one pass over the elements
+    /// (element_value_gradient). Inside an OpenMP parallel region (the training losses
+    /// parallelise over the samples of a batch) and for small meshes it runs serially,
+    /// scattering as it goes, and allocates nothing.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const;
     /// Dense-free sparse Hessian over all 3N DOFs (full, both triangles); for
     /// tests and small problems. Newton uses HessianAssembler instead.
     SparseMatrixd hessian(const VectorXd& x, bool project_psd) const;
@@ -90,6 +98,14 @@ public:
         Eigen::Map<ElementVector> out(g);
         out = local_gradient(e, gather(e, x));
     }
+    double element_value_gradient(Index e, const VectorXd& x, double* g) const final
+    {
+        ElementVector ge;
+        const double value = local_value_gradient(e, gather(e, x), ge);
+        Eigen::Map<ElementVector> out(g);
+        out = ge;
+        return value;
+    }
     void element_hessian(Index e, const VectorXd& x, bool project, double* H) const final
     {
         const ElementVector xe = gather(e, x);
@@ -105,6 +121,13 @@ protected:
     virtual double local_value(Index e, const ElementVector& xe) const = 0;
     virtual ElementVector local_gradient(Index e, const ElementVector& xe) const = 0;
     virtual ElementMatrix local_hessian(Index e, const ElementVector& xe) const = 0;
+    /// local_value, with local_gradient written to g; override when the two share work
+    /// (the derivative tests check an override against both).
+    virtual double local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const
+    {
+        g = local_gradient(e, xe);
+        return local_value(e, xe);
+    }
     /// A positive semi-definite stand-in for local_hessian, used by Newton's projected
     /// fallback. Contract: symmetric, PSD up to round-off, and equal to local_hessian
     /// whenever that is already PSD. The default clamps the eigenvalues of the 3K×3K
@@ -138,6 +161,8 @@ public:
 
     double value(const VectorXd& x) const;
     VectorXd gradient(const VectorXd& x) const;
+    /// Σ_k w_k E_k(x), with its gradient written to g (resized): one pass per term.
+    double value_gradient(const VectorXd& x, VectorXd& g) const;
     /// Per-term values, in the order of terms() (for logging and metrics).
     std::vector<double> term_values(const VectorXd& x) const;
 

@@ -52,6 +52,15 @@ ShellHingeBending::ElementVector ShellHingeBending::local_gradient(Index h, cons
     return 2.0 * m_weights[size_t(h)] * delta * g_theta;
 }
 
+double ShellHingeBending::local_value_gradient(Index h, const ElementVector& xe, ElementVector& g) const
+{
+    ElementVector g_theta;
+    const double theta = dihedral_angle(xe, &g_theta, nullptr);
+    const double delta = wrap_angle(theta - m_rest_angles[size_t(h)]);
+    g = 2.0 * m_weights[size_t(h)] * delta * g_theta;
+    return m_weights[size_t(h)] * delta * delta;
+}
+
 ShellHingeBending::ElementMatrix ShellHingeBending::local_hessian(Index h, const ElementVector& xe) const
 {
     // E = w (θ − θ̄)²  ⇒  ∇²E = 2w (∇θ ∇θᵀ + (θ − θ̄) ∇²θ), with ∇θ, ∇²θ exact

@@ -39,6 +39,7 @@ public:
 protected:
     double local_value(Index h, const ElementVector& xe) const override;
     ElementVector local_gradient(Index h, const ElementVector& xe) const override;
+    double local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const override;
     ElementMatrix local_hessian(Index h, const ElementVector& xe) const override;
 
 private:

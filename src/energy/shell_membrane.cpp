@@ -63,6 +63,13 @@ ShellMembrane::ElementVector ShellMembrane::local_gradient(Index f, const Elemen
                                        m_areas[size_t(f)], m_lame);
 }
 
+double ShellMembrane::local_value_gradient(Index f, const ElementVector& xe, ElementVector& g) const
+{
+    const auto F = deformation_gradient(f, xe);
+    g = stvk_element_gradient<3, 2>(F, m_shape_gradients[size_t(f)], m_areas[size_t(f)], m_lame);
+    return m_areas[size_t(f)] * stvk_psi<2>(F, m_lame);
+}
+
 ShellMembrane::ElementMatrix ShellMembrane::local_hessian(Index f, const ElementVector& xe) const
 {
     // H = A Vec(∂F/∂x)ᵀ (∂P/∂F) Vec(∂F/∂x) with the 3×2 F of the rest frame; the blockwise

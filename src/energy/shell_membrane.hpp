@@ -40,6 +40,7 @@ public:
 protected:
     double local_value(Index f, const ElementVector& xe) const override;
     ElementVector local_gradient(Index f, const ElementVector& xe) const override;
+    double local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const override;
     ElementMatrix local_hessian(Index f, const ElementVector& xe) const override;
 
 private:

@@ -54,6 +54,13 @@ TetStVK::ElementVector TetStVK::local_gradient(Index t, const ElementVector& xe)
                                        m_volumes[size_t(t)], m_lame);
 }
 
+double TetStVK::local_value_gradient(Index t, const ElementVector& xe, ElementVector& g) const
+{
+    const auto F = deformation_gradient(t, xe);
+    g = stvk_element_gradient<4, 3>(F, m_shape_gradients[size_t(t)], m_volumes[size_t(t)], m_lame);
+    return m_volumes[size_t(t)] * stvk_psi<3>(F, m_lame);
+}
+
 TetStVK::ElementMatrix TetStVK::local_hessian(Index t, const ElementVector& xe) const
 {
     // H = V Vec(∂F/∂x)ᵀ (∂P/∂F) Vec(∂F/∂x), formed blockwise: see stvk_element_hessian.

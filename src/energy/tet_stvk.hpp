@@ -47,6 +47,7 @@ public:
 protected:
     double local_value(Index t, const ElementVector& xe) const override;
     ElementVector local_gradient(Index t, const ElementVector& xe) const override;
+    double local_value_gradient(Index t, const ElementVector& xe, ElementVector& g) const override;
     ElementMatrix local_hessian(Index t, const ElementVector& xe) const override;
     ElementMatrix local_projected_hessian(Index t, const ElementVector& xe) const override;
 

@@ -56,6 +56,9 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
         s << ";penalty_weight=" << nn::exact_text(m_potential.penalty_weight());
     }
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
+    // Trainer generation 2 (2026-11-30): every sample every epoch, the compiled frozen
+    // decoder. Runs of generation 1 (the last partial batch dropped) are not resumed.
+    s << ";batches=all;decoder=compiled";
     return s.str();
 }
 
@@ -183,8 +186,8 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
 
 void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
 {
-    m_decoded_prev = m_autoencoder.decode(samples.z_prev, samples.targets_prev);
-    m_decoded_prev2 = m_autoencoder.decode(samples.z_prev2, samples.targets_prev2);
+    m_decoded_prev = m_potential.decode(samples.z_prev, samples.targets_prev);
+    m_decoded_prev2 = m_potential.decode(samples.z_prev2, samples.targets_prev2);
 }
 
 MatrixXd IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, int which)
@@ -192,12 +195,12 @@ MatrixXd IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, int whi
     const MatrixXd& z = which == 1 ? batch.z_prev : batch.z_prev2;
     const MatrixXd& targets = which == 1 ? batch.targets_prev : batch.targets_prev2;
     const MatrixXd& cache = which == 1 ? m_decoded_prev : m_decoded_prev2;
-    if (cache.size() == 0 || batch.source.size() != size_t(batch.size())) return m_autoencoder.decode(z, targets);
+    if (cache.size() == 0 || batch.source.size() != size_t(batch.size())) return m_potential.decode(z, targets);
     MatrixXd X(cache.rows(), batch.size());
     for (Index i = 0; i < batch.clean; ++i) X.col(i) = cache.col(batch.source[size_t(i)]);
     const Index noisy = batch.size() - batch.clean;
     if (noisy > 0) {
-        X.rightCols(noisy) = m_autoencoder.decode(z.rightCols(noisy), targets.rightCols(noisy));
+        X.rightCols(noisy) = m_potential.decode(z.rightCols(noisy), targets.rightCols(noisy));
     }
     return X;
 }
@@ -272,52 +275,67 @@ private:
 
 } // namespace
 
+void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& samples)
+{
+    const Index S = samples.size();
+    // Input standardisation and output scale from the (clean) training samples.
+    MatrixXd inputs(model.input_dim(), S);
+    inputs << samples.z_prev, samples.z_prev2, samples.p, samples.p_prev, samples.p_prev2;
+    model.inputs = nn::Standardizer::fit(inputs);
+    const MatrixXd dz = samples.z_target - samples.z_prev;
+    const VectorXd mean = dz.rowwise().mean();
+    VectorXd std = ((dz.colwise() - mean).array().square().rowwise().sum() / double(S)).sqrt();
+    for (Index c = 0; c < std.size(); ++c) {
+        if (!(std[c] > 1e-12)) std[c] = 1.0;
+    }
+    model.output_scale = std;
+    if (m_options.loss == IntegratorLoss::SelfSupervised) {
+        m_potential.freeze_decoder();  // the autoencoder does not change while the integrator trains
+        cache_decoded_inputs(samples);
+    }
+    if (m_options.loss == IntegratorLoss::SelfSupervised && m_options.data_balancing) {
+        m_velocity_floor = std::max(m_options.balancing_floor * mean_input_speed(samples), 1e-12);
+    }
+    model.loss = to_string(m_options.loss);
+    model.description = m_options.describe();
+}
+
+nn::TrainingLoopOptions IntegratorTrainer::loop_options() const
+{
+    nn::TrainingLoopOptions loop;
+    static_cast<nn::TrainingRunOptions&>(loop) = m_options;
+    loop.label = "train " + to_string(m_options.loss);
+    loop.epochs = m_options.epochs;
+    loop.batch_size = m_options.batch_size;
+    loop.drop_last = false;  // every sample every epoch: ceil(S / batch) near-equal batches
+    loop.learning_rate = m_options.learning_rate;
+    loop.seed = m_options.seed;
+    return loop;
+}
+
+std::unique_ptr<nn::Learner> IntegratorTrainer::learner(LatentMlpModel& model, const TrainingSamples& samples)
+{
+    return std::make_unique<IntegratorLearner>(*this, model, samples);
+}
+
 IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const TrainingSamples& samples)
 {
     Timer timer;
-    const Index S = samples.size();
     // The fingerprint: resolved options and the inputs' contents, taken before anything
     // is loaded (the network part identifies the caller's initial weights).
     nn::Fingerprint fingerprint;
     {
         Fnv1a64 net_hash;
         nn::hash_network(net_hash, model.network);
-        fingerprint.add("options", resolved_options(S))
+        fingerprint.add("options", resolved_options(samples.size()))
             .add("autoencoder", m_autoencoder.content_hash())
             .add("data", samples_hash(samples))
             .add("physics", physics_hash(m_model.spec()))
             .add("network", net_hash.hex());
     }
-    // Input standardisation and output scale from the (clean) training samples.
-    {
-        MatrixXd inputs(model.input_dim(), S);
-        inputs << samples.z_prev, samples.z_prev2, samples.p, samples.p_prev, samples.p_prev2;
-        model.inputs = nn::Standardizer::fit(inputs);
-        const MatrixXd dz = samples.z_target - samples.z_prev;
-        const VectorXd mean = dz.rowwise().mean();
-        VectorXd std = ((dz.colwise() - mean).array().square().rowwise().sum() / double(S)).sqrt();
-        for (Index c = 0; c < std.size(); ++c) {
-            if (!(std[c] > 1e-12)) std[c] = 1.0;
-        }
-        model.output_scale = std;
-    }
-    if (m_options.loss == IntegratorLoss::SelfSupervised) cache_decoded_inputs(samples);
-    if (m_options.loss == IntegratorLoss::SelfSupervised && m_options.data_balancing) {
-        m_velocity_floor = std::max(m_options.balancing_floor * mean_input_speed(samples), 1e-12);
-    }
-    model.loss = to_string(m_options.loss);
-    model.description = m_options.describe();
-
-    nn::TrainingLoopOptions loop;
-    loop.label = "train " + to_string(m_options.loss);
-    loop.epochs = m_options.epochs;
-    loop.batch_size = m_options.batch_size;
-    loop.drop_last = true;  // floor(S / batch) Adam steps per epoch, as the published tables were trained
-    loop.learning_rate = m_options.learning_rate;
-    loop.seed = m_options.seed;
-    static_cast<nn::TrainingRunOptions&>(loop) = m_options;
+    prepare(model, samples);
     IntegratorLearner learner(*this, model, samples);
-    IntegratorTrainSummary summary = nn::run_training_loop(learner, loop, fingerprint);
+    IntegratorTrainSummary summary = nn::run_training_loop(learner, loop_options(), fingerprint);
     summary.seconds = timer.seconds();  // with the set-up above
     return summary;
 }

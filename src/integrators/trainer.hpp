@@ -22,6 +22,7 @@
 //   asked for, as in the paper, where the baseline differs from the method only in the loss.
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,14 @@ public:
 
     /// Fit the input standardiser and output scale from the samples, then train.
     IntegratorTrainSummary train(LatentMlpModel& model, const TrainingSamples& samples);
+    /// What train() does before its epochs: the input standardiser and output scale of
+    /// `model`, the decoded-input cache and the balancing floor.
+    void prepare(LatentMlpModel& model, const TrainingSamples& samples);
+    /// The shared loop's options train() uses (labels, epochs, batches, seed, checkpoints).
+    nn::TrainingLoopOptions loop_options() const;
+    /// The learner train() hands to the shared loop (after prepare()); `model` and
+    /// `samples` must outlive it. For nn::EpochRunner (the train_epoch benchmarks).
+    std::unique_ptr<nn::Learner> learner(LatentMlpModel& model, const TrainingSamples& samples);
     /// The velocity floor of data balancing (set by train() or set_velocity_floor()).
     double velocity_floor() const { return m_velocity_floor; }
     void set_velocity_floor(double v) { m_velocity_floor = v; }

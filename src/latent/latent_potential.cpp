@@ -60,7 +60,13 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
                     std::to_string(n_dofs) + " and " + std::to_string(n_dofs) + " rows, as many columns, 0 or " +
                     std::to_string(B) + " weights");
     LatentEnergies out;
-    MatrixXd X = m_autoencoder.decode(Z, bc_targets);
+    MatrixXd X;
+    if (m_frozen) {
+        m_frozen->forward_batch(Z, m_features, options.gradient);
+        X = m_autoencoder.encoding().to_positions(m_features, bc_targets);
+    } else {
+        X = m_autoencoder.decode(Z, bc_targets);
+    }
     out.energies.resize(B);
     MatrixXd grad_x(options.gradient ? n_dofs : 0, options.gradient ? B : 0);
 #pragma omp parallel for schedule(dynamic, 1)
@@ -69,8 +75,13 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
         const VectorXd x1 = X_prev.col(i), x2 = X_prev2.col(i), xt = X.col(i);
         pot.set_previous(x1, x2);
         pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
-        out.energies[i] = pot.value(xt);
-        if (options.gradient) grad_x.col(i) = pot.gradient(xt);
+        if (options.gradient) {
+            VectorXd g;
+            out.energies[i] = pot.value_gradient(xt, g);
+            grad_x.col(i) = g;
+        } else {
+            out.energies[i] = pot.value(xt);
+        }
     }
     if (check_finite && !out.energies.allFinite())
         throw NumericalError("non-finite incremental potential in the training batch");
@@ -81,10 +92,26 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
     out.objective = weights.dot(out.energies) / options.normalization;
     if (options.gradient) {
         const MatrixXd weighted = grad_x * (weights / options.normalization).asDiagonal();
-        out.grad_z = m_autoencoder.decoder_vjp(Z, weighted);
+        if (m_frozen)
+            m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(weighted), out.grad_z);
+        else
+            out.grad_z = m_autoencoder.decoder_vjp(Z, weighted);
     }
     if (options.decoded) out.X = std::move(X);
     return out;
+}
+
+void LatentPotential::freeze_decoder()
+{
+    m_frozen = std::make_unique<nn::InferenceNetworkD>(m_autoencoder.decoder());
+}
+
+MatrixXd LatentPotential::decode(const MatrixXd& Z, const MatrixXd& bc_targets)
+{
+    if (!m_frozen) return m_autoencoder.decode(Z, bc_targets);
+    MatrixXd features;
+    m_frozen->forward_batch(Z, features, false);
+    return m_autoencoder.encoding().to_positions(features, bc_targets);
 }
 
 } // namespace lb

@@ -12,10 +12,15 @@
 //
 // w_bc is applied_penalty_weight(model, penalty_weight) (sim/physics_model.hpp): the
 // penalty for cloth and solids, none for rods (their roots are decoded exactly).
-// The decoder is evaluated in eval mode and never modified.
+// The decoder is evaluated in eval mode and never modified. A caller that will not change
+// the decoder either (the integrator trainers) may freeze_decoder(): the decoder is then
+// compiled once (BatchNorm folded into the linear layers, nn/inference_network.hpp) and a
+// batch costs one decoder pass with the VJP reusing it, instead of two.
+#include <memory>
 #include <vector>
 
 #include "latent/autoencoder.hpp"
+#include "nn/inference_network.hpp"
 #include "sim/physics_model.hpp"
 
 namespace lb {
@@ -78,6 +83,15 @@ public:
                             const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
                             const LatentEnergyOptions& options = {});
 
+    /// Compile the decoder as it is now and use that copy from here on (see above). The
+    /// results equal the live decoder's to round-off (the folding reorders operations);
+    /// later changes to the autoencoder's weights are NOT seen.
+    void freeze_decoder();
+    bool decoder_frozen() const { return m_frozen != nullptr; }
+    /// D(z) for latent × B codes and 3B × B targets: the frozen copy if any, else the
+    /// autoencoder's decode().
+    MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
+
 private:
     /// evaluate(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
     LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
@@ -89,6 +103,8 @@ private:
     Autoencoder& m_autoencoder;
     double m_penalty_weight = 0.0;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
+    std::unique_ptr<nn::InferenceNetworkD> m_frozen;  ///< freeze_decoder()'s compiled decoder
+    MatrixXd m_features;                              ///< its output workspace
 };
 
 } // namespace lb

@@ -4,6 +4,7 @@
 #include <cassert>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #if defined(__AVX__) && defined(__FMA__)
 #include <immintrin.h>
@@ -321,6 +322,23 @@ void scale_rows_by_derivative(ActivationKind kind, const Vec& pre, M&& m)
     for (Index r = 0; r < m.rows(); ++r) m.row(r) *= activation_derivative(kind, pre[r]);
 }
 
+/// a ⊙= f'(pre) element-wise (arrays of the same shape), vectorised.
+template <typename A, typename P>
+void multiply_by_derivative(ActivationKind kind, const P& pre, A&& a)
+{
+    using S = typename std::decay_t<A>::Scalar;
+    switch (kind) {
+    case ActivationKind::swish: {
+        const auto sigma = (S(1) + (-pre).exp()).inverse().eval();
+        a *= sigma * (S(1) + pre * (S(1) - sigma));
+        break;
+    }
+    case ActivationKind::tanh: a *= S(1) - pre.tanh().square(); break;
+    case ActivationKind::relu: a *= (pre > S(0)).template cast<S>(); break;
+    case ActivationKind::identity: break;
+    }
+}
+
 } // namespace
 
 template <typename S>
@@ -554,6 +572,92 @@ void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, 
         const Matrix& t_out = m_adjoint[static_cast<std::size_t>(m_output)];
         for (Index i = 0; i < k; ++i) J.row(i) = t_out.row(rows[static_cast<std::size_t>(i)]);
     }
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, Matrix& Y, bool record)
+{
+    if (X.rows() != m_in)
+        throw std::invalid_argument("InferenceNetwork::forward_batch: expected " + std::to_string(m_in) +
+                                    " input rows, got " + std::to_string(X.rows()));
+    const Index B = X.cols();
+    m_batch.resize(m_buffers.size());
+    m_batch_pre.resize(m_ops.size());
+    m_batch[0] = X;
+    for (std::size_t i = 0; i < m_ops.size(); ++i) {
+        const Op& op = m_ops[i];
+        const Matrix& src = m_batch[static_cast<std::size_t>(op.src)];
+        Matrix& dst = m_batch[static_cast<std::size_t>(op.dst)];
+        switch (op.kind) {
+        case Op::Kind::affine:
+            if (op.accumulate) {
+                dst.noalias() += op.W * src;
+            } else {
+                dst.resize(op.out, B);
+                dst.noalias() = op.W * src;
+            }
+            dst.colwise() += op.b.head(op.out);
+            break;
+        case Op::Kind::scale:
+            dst = (src.array().colwise() * op.b.array()).colwise() + op.t.array();
+            break;
+        case Op::Kind::act: dst = src; break;
+        case Op::Kind::add: dst += src; break;
+        }
+        if (op.act != ActivationKind::identity) {
+            if (record) m_batch_pre[i] = dst;
+            auto a = dst.array();
+            apply_activation(op.act, a);
+        }
+    }
+    Y.swap(m_batch[static_cast<std::size_t>(m_output)]);
+    m_batch_columns = record ? B : -1;
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Matrix& dX)
+{
+    const Index B = dY.cols();
+    if (m_batch_columns != B || dY.rows() != m_out)
+        throw std::invalid_argument("InferenceNetwork::vjp_batch: dY must be out_features × the columns of the last "
+                                    "recorded forward_batch");
+    m_batch_adjoint.resize(m_buffers.size());
+    for (std::size_t b = 0; b < m_batch_adjoint.size(); ++b) m_batch_adjoint[b].setZero(m_buffer_size[b], B);
+    // The output layer (the PCA layer) reads dY directly when it alone writes the output.
+    std::size_t end = m_ops.size();
+    const Op& last = m_ops.back();
+    bool direct = last.kind == Op::Kind::affine && !last.accumulate && last.act == ActivationKind::identity &&
+                  last.dst == m_output;
+    for (std::size_t i = 0; direct && i + 1 < m_ops.size(); ++i)
+        if (m_ops[i].dst == m_output) direct = false;
+    if (direct) {
+        m_batch_adjoint[static_cast<std::size_t>(last.src)].noalias() += last.W.transpose() * dY;
+        --end;
+    } else {
+        m_batch_adjoint[static_cast<std::size_t>(m_output)] = dY;
+    }
+    for (std::size_t i = end; i-- > 0;) {
+        const Op& op = m_ops[i];
+        Matrix& a_dst = m_batch_adjoint[static_cast<std::size_t>(op.dst)];
+        Matrix& a_src = m_batch_adjoint[static_cast<std::size_t>(op.src)];
+        multiply_by_derivative(op.act, m_batch_pre[i].array(), a_dst.array());
+        switch (op.kind) {
+        case Op::Kind::affine:
+            a_src.noalias() += op.W.transpose() * a_dst;
+            if (!op.accumulate) a_dst.setZero();
+            break;
+        case Op::Kind::scale:
+            a_src += op.b.head(op.in).asDiagonal() * a_dst;
+            a_dst.setZero();
+            break;
+        case Op::Kind::act:
+            a_src += a_dst;
+            a_dst.setZero();
+            break;
+        case Op::Kind::add: a_src += a_dst; break;
+        }
+    }
+    dX.swap(m_batch_adjoint[0]);
 }
 
 template <typename S>

@@ -73,6 +73,16 @@ public:
     void jacobian_rows(const Eigen::Ref<const Vector>& x, const std::vector<Index>& rows, Eigen::Ref<Matrix> J,
                        JacobianMode mode = JacobianMode::automatic);
 
+    /// Batched evaluation (columns are samples) with the same fused ops, one Eigen GEMM
+    /// per affine op: for the frozen decoder of a training loss, where every batch is
+    /// decoded and then differentiated. With `record`, the pre-activations are kept for
+    /// vjp_batch(). Y is resized; its storage is swapped with an internal buffer (no
+    /// copy), so pass the same matrix every time to avoid allocation.
+    void forward_batch(const Eigen::Ref<const Matrix>& X, Matrix& Y, bool record = false);
+    /// dX = Jᵀ dY for every column at the points of the last forward_batch(record = true):
+    /// one reverse pass, one GEMM per affine op. dY out × B, dX in × B (resized).
+    void vjp_batch(const Eigen::Ref<const Matrix>& dY, Matrix& dX);
+
     /// Multiply-adds of one evaluate() (weights touched once each).
     long long multiply_adds() const;
     /// Bytes of packed weights streamed by one evaluate().
@@ -114,6 +124,10 @@ private:
     std::vector<Vector> m_pre;                 ///< per op: pre-activation (tape)
     std::vector<Matrix> m_adjoint;             ///< per buffer: padded size × k (reverse) or size × in (forward)
     Matrix m_rows_weight;
+
+    // batched workspaces: per buffer (logical size × B) and per op with an activation
+    std::vector<Matrix> m_batch, m_batch_pre, m_batch_adjoint;
+    Index m_batch_columns = -1;  ///< columns of the last recorded forward_batch (−1: none)
 };
 
 using InferenceNetwork = BasicInferenceNetwork<float>;

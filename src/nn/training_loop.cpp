@@ -176,25 +176,6 @@ std::vector<Index> batch_bounds(const TrainingLoopOptions& o, Index S, Index min
     return bounds;
 }
 
-/// One epoch: a seeded shuffle, then the mini-batches, one Adam step each. Returns the
-/// sample-weighted mean batch loss.
-double run_epoch(Learner& learner, Adam& adam, std::vector<Index>& order, const std::vector<Index>& bounds,
-                 std::uint64_t seed)
-{
-    const Index S = Index(order.size());
-    Rng rng(seed);
-    std::iota(order.begin(), order.end(), Index(0));
-    for (Index i = S - 1; i > 0; --i) std::swap(order[std::size_t(i)], order[std::size_t(rng.index(i + 1))]);
-    double weighted = 0.0;
-    for (std::size_t b = 0; b + 1 < bounds.size(); ++b) {
-        const std::vector<Index> idx(order.begin() + bounds[b], order.begin() + bounds[b + 1]);
-        adam.zero_grad();
-        weighted += learner.loss_and_gradient(idx, rng) * double(idx.size());
-        adam.step();
-    }
-    return weighted / double(bounds.back());
-}
-
 /// Track the best validation loss (snapshotting the learner's weights there).
 void track_validation(Learner& learner, double val, Counters& c)
 {
@@ -221,16 +202,44 @@ void report_epoch(Progress& progress, const Counters& c, bool validation, double
 
 } // namespace
 
+EpochRunner::EpochRunner(Learner& learner, const TrainingLoopOptions& o)
+    : m_learner(learner),
+      m_seed(o.seed),
+      m_params(learner.parameters()),
+      m_adam(m_params, [&] {
+          AdamOptions a;
+          a.lr = o.learning_rate;
+          return a;
+      }()),
+      m_bounds(batch_bounds(o, learner.num_samples(), check_options(o, learner.num_samples()))),
+      m_order(static_cast<std::size_t>(learner.num_samples()))
+{
+}
+
+double EpochRunner::run(int epoch)
+{
+    const Index S = Index(m_order.size());
+    Rng rng(epoch_seed(m_seed, epoch));
+    std::iota(m_order.begin(), m_order.end(), Index(0));
+    for (Index i = S - 1; i > 0; --i) std::swap(m_order[std::size_t(i)], m_order[std::size_t(rng.index(i + 1))]);
+    double weighted = 0.0;
+    std::vector<Index> idx;
+    for (std::size_t b = 0; b + 1 < m_bounds.size(); ++b) {
+        idx.assign(m_order.begin() + m_bounds[b], m_order.begin() + m_bounds[b + 1]);
+        m_adam.zero_grad();
+        weighted += m_learner.loss_and_gradient(idx, rng) * double(idx.size());
+        m_adam.step();
+    }
+    return weighted / double(m_bounds.back());
+}
+
 TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOptions& o, const Fingerprint& fingerprint)
 {
-    const Index S = learner.num_samples();
-    const Index min_batch = check_options(o, S);
+    EpochRunner runner(learner, o);
     Timer timer;
     TrainingLoopSummary summary;
-    std::vector<ParameterRef> params = learner.parameters();
-    AdamOptions adam_options;
-    adam_options.lr = o.learning_rate;
-    Adam adam(params, adam_options);
+    std::vector<ParameterRef>& params = runner.parameters();
+    Adam& adam = runner.adam();
     Counters c;
     const bool validation = learner.has_validation();
 
@@ -248,8 +257,6 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
         }
     }
 
-    const std::vector<Index> bounds = batch_bounds(o, S, min_batch);
-    std::vector<Index> order(static_cast<std::size_t>(S));
     int last_saved = c.epoch;
     auto checkpoint = [&] {
         if (path.empty()) return;
@@ -259,7 +266,7 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
     auto early_stop = [&] { return validation && o.patience > 0 && c.epochs_since_improvement >= o.patience; };
     Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30);
     while (c.epoch < o.epochs && !early_stop()) {
-        c.last_loss = run_epoch(learner, adam, order, bounds, epoch_seed(o.seed, c.epoch));
+        c.last_loss = runner.run(c.epoch);
         ++c.epoch;
         const double val = validation ? learner.validation_loss() : 0.0;
         if (!std::isfinite(c.last_loss) || !std::isfinite(val))

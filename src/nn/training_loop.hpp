@@ -28,6 +28,7 @@
 
 #include "core/rng.hpp"
 #include "io/hdf5.hpp"
+#include "nn/adam.hpp"
 #include "nn/checkpoint.hpp"
 #include "nn/layer.hpp"
 
@@ -108,6 +109,33 @@ struct TrainingLoopSummary {
 
 /// The RNG seed of epoch `epoch` (splitmix64 of the two).
 std::uint64_t epoch_seed(std::uint64_t seed, int epoch);
+
+/// The epochs of run_training_loop without its bookkeeping (checkpoints, validation,
+/// progress): the learner's parameters, an Adam optimiser over them and the batch split.
+/// run_training_loop runs its epochs through this class; benchmarks (train_epoch/<scene>)
+/// time exactly that code.
+class EpochRunner {
+public:
+    /// Throws ConfigError naming options.label on bad options (epochs < 0, batch below
+    /// min_batch, non-positive learning rate, too few samples).
+    EpochRunner(Learner& learner, const TrainingLoopOptions& options);
+    /// Epoch `epoch` (0-based): shuffle with Rng(epoch_seed(seed, epoch)), one Adam step
+    /// per batch. Returns the sample-weighted mean batch loss.
+    double run(int epoch);
+    std::vector<ParameterRef>& parameters() { return m_params; }
+    Adam& adam() { return m_adam; }
+    /// Batches per epoch and the samples they cover (all S unless drop_last).
+    Index num_batches() const { return Index(m_bounds.size()) - 1; }
+    Index samples_per_epoch() const { return m_bounds.back(); }
+
+private:
+    Learner& m_learner;
+    std::uint64_t m_seed;
+    std::vector<ParameterRef> m_params;
+    Adam m_adam;
+    std::vector<Index> m_bounds;
+    std::vector<Index> m_order;
+};
 
 /// Train `learner`; `fingerprint` identifies everything the numbers depend on (nn/checkpoint.hpp).
 /// Throws NumericalError if the loss becomes non-finite.

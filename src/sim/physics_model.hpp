@@ -93,6 +93,8 @@ public:
     const EnergySum& terms() const { return m_sum; }
     double value(const VectorXd& x) const { return m_sum.value(x); }
     VectorXd gradient(const VectorXd& x) const { return m_sum.gradient(x); }
+    /// value(x), with gradient(x) written to g (resized), in one pass over the elements.
+    double value_gradient(const VectorXd& x, VectorXd& g) const { return m_sum.value_gradient(x, g); }
     const VectorXd& x_tilde() const { return m_x_tilde; }
     bool has_penalty() const { return m_penalty != nullptr; }
 

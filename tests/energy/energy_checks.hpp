@@ -74,10 +74,38 @@ inline FdOptions fd_options(double length_scale, const MatrixXd& analytic)
     return opt;
 }
 
-/// ∇E against central differences of E (whole mesh).
+/// The fused pass (Energy::add_value_gradient, element_value_gradient overrides) against
+/// value() and gradient(), serially and inside a parallel region, to round-off.
+inline ::testing::AssertionResult check_fused_value_gradient(const Energy& energy, const VectorXd& x)
+{
+    const double value = energy.value(x);
+    const VectorXd gradient = energy.gradient(x);
+    for (bool nested : {false, true}) {
+        VectorXd g = VectorXd::Constant(x.size(), 0.25);
+        double fused = 0.0;
+#pragma omp parallel num_threads(2) if (nested)
+        {
+#pragma omp single
+            fused = energy.add_value_gradient(x, 2.0, g);
+        }
+        const double scale = std::max(gradient.cwiseAbs().maxCoeff(), 1e-300);
+        const double value_error = std::abs(fused - value) / std::max(std::abs(value), 1e-300);
+        const double gradient_error =
+            (g - VectorXd::Constant(x.size(), 0.25) - 2.0 * gradient).cwiseAbs().maxCoeff() / (2.0 * scale);
+        if (!(value_error < 1e-12 && gradient_error < 1e-12))
+            return ::testing::AssertionFailure() << energy.name() << " add_value_gradient (" << (nested ? "nested" : "top level")
+                                                 << "): value error " << value_error << ", gradient error "
+                                                 << gradient_error << " relative";
+    }
+    return ::testing::AssertionSuccess();
+}
+
+/// ∇E against central differences of E (whole mesh), and the fused value-gradient pass
+/// against both.
 inline ::testing::AssertionResult check_energy_gradient(const Energy& energy, const VectorXd& x,
                                                         double length_scale)
 {
+    if (auto fused = check_fused_value_gradient(energy, x); !fused) return fused;
     const MatrixXd analytic = energy.gradient(x).transpose();
     return check_gradient([&](const VectorXd& y) { return energy.value(y); },
                           [&](const VectorXd& y) { return energy.gradient(y); }, x,

@@ -186,6 +186,67 @@ TEST(InferenceNetwork, JacobianRowsMatchDoublePath)
     }
 }
 
+/// Batched forward and VJP (the frozen decoder of the training losses) against the
+/// Sequential's eval-mode forward and nn::vjp_batch, on the paper decoders and on a
+/// network with every op kind (scale, act, add, an output activation).
+TEST(InferenceNetwork, BatchedForwardAndVjpMatchSequential)
+{
+    Rng rng(85);
+    std::vector<std::pair<std::string, Sequential>> nets;
+    for (const auto& arch : table2_architectures()) nets.emplace_back(arch.name, make_mlp(arch.decoder, rng));
+    {
+        Sequential net;
+        net.emplace<BatchNorm1d>(5);
+        net.emplace<Activation>(ActivationKind::tanh);
+        net.emplace<Linear>(5, 8, rng);
+        net.emplace<ResidualBlock>(8, 8, true, ActivationKind::swish, rng);
+        net.emplace<BatchNorm1d>(8);
+        net.emplace<Swish>();
+        net.emplace<ResidualBlock>(8, 6, false, ActivationKind::relu, rng);
+        net.emplace<Activation>(ActivationKind::tanh);
+        nets.emplace_back("unfoldable", std::move(net));
+    }
+    for (auto& [name, net] : nets) {
+        test::randomize_batch_norm(net, rng);
+        InferenceNetworkD fast_d(net);
+        InferenceNetwork fast_f(net);
+        const Index in = fast_d.in_features(), out = fast_d.out_features();
+        for (Index B : {Index(1), Index(37)}) {
+            const MatrixXd Z = test::random_matrix(in, B, rng, -2, 2);
+            const MatrixXd V = test::random_matrix(out, B, rng, -1, 1);
+            const MatrixXd Y_ref = net.forward(Z, false);
+            const MatrixXd G_ref = vjp_batch(net, Z, V);
+            MatrixXd Y, G;
+            fast_d.forward_batch(Z, Y, true);
+            fast_d.vjp_batch(V, G);
+            ASSERT_EQ(Y.rows(), out);
+            ASSERT_EQ(G.rows(), in);
+            ASSERT_EQ(G.cols(), B);
+            const double y_scale = Y_ref.cwiseAbs().maxCoeff(), g_scale = G_ref.cwiseAbs().maxCoeff();
+            EXPECT_LT((Y - Y_ref).cwiseAbs().maxCoeff(), 1e-12 * y_scale) << name << " B=" << B;
+            EXPECT_LT((G - G_ref).cwiseAbs().maxCoeff(), 1e-12 * g_scale) << name << " B=" << B;
+            // A second call reuses the swapped buffers and must give the same numbers.
+            MatrixXd Y2, G2;
+            fast_d.forward_batch(Z, Y2, true);
+            fast_d.vjp_batch(V, G2);
+            EXPECT_EQ((Y2 - Y).cwiseAbs().maxCoeff(), 0.0) << name;
+            EXPECT_EQ((G2 - G).cwiseAbs().maxCoeff(), 0.0) << name;
+            MatrixXf Yf, Gf;
+            fast_f.forward_batch(Z.cast<float>(), Yf, true);
+            fast_f.vjp_batch(V.cast<float>(), Gf);
+            EXPECT_LT((Yf.cast<double>() - Y_ref).cwiseAbs().maxCoeff(), 1e-4 * y_scale) << name << " (float)";
+            EXPECT_LT((Gf.cast<double>() - G_ref).cwiseAbs().maxCoeff(), 1e-4 * g_scale) << name << " (float)";
+        }
+        // A VJP needs a recorded forward of as many columns.
+        MatrixXd Y, G;
+        fast_d.forward_batch(MatrixXd::Zero(in, 3), Y, false);
+        EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 3), G), std::invalid_argument) << name;
+        fast_d.forward_batch(MatrixXd::Zero(in, 3), Y, true);
+        EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 4), G), std::invalid_argument) << name;
+        EXPECT_THROW(fast_d.forward_batch(MatrixXd::Zero(in + 1, 3), Y), std::invalid_argument) << name;
+    }
+}
+
 TEST(InferenceNetwork, EvaluateAndJacobianRowsDoNotAllocate)
 {
     if (!LB_COUNT_ALLOCATIONS) GTEST_SKIP() << "malloc is AddressSanitizer's in this build";

@@ -1,0 +1,122 @@
+// One training epoch of the paper's self-supervised integrator per full-size scene
+// (issue 14's "train_epoch/<scene>"): the production epoch code (nn::EpochRunner over the
+// trainer's learner, as run_training_loop runs it) with the suites' settings: batch 256,
+// noise and balancing on, the scene's Table 1 latent size and Table 2 integrator widths,
+// the paper's 200×3 ResNet decoder with a 50-wide PCA layer.
+//
+// The data: the scene's sample count S = Σ over sequences of (train_frames − 2), the
+// number a suite trains on. To keep the set-up short the states are the first
+// kSimulatedFrames frames of every sequence (full-space simulation), repeated
+// until each sequence has its train_frames; the autoencoder is PCA-initialised on them
+// and otherwise untrained. An epoch's cost depends on S, the widths and the mesh, not on
+// the values. Counters: samples (S), columns (network columns per epoch, noisy copies
+// included), batches. Full-size Armadillo/Bunny need scripts/prepare_meshes.
+#include "lb_paths.hpp"
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "integrators/trainer.hpp"
+#include "paper/scene_defaults.hpp"
+#include "sim/dataset.hpp"
+
+namespace lb {
+namespace {
+
+constexpr int kSimulatedFrames = 8;
+
+struct TrainingSetup {
+    std::unique_ptr<PhysicsModel> model;
+    std::unique_ptr<Autoencoder> autoencoder;
+    TrainingSamples samples;
+};
+
+/// The scene's dataset shape (sequence count, train_frames) filled with its first frames.
+Dataset short_dataset(const Scene& scene)
+{
+    SimulateOptions options;
+    options.progress = false;
+    options.max_frames = kSimulatedFrames;
+    Dataset data = simulate_scene(scene, options);
+    for (std::size_t s = 0; s < data.sequences.size(); ++s) {
+        SequenceData& seq = data.sequences[s];
+        const Index want = scene.sequences[s].train_frames;
+        const Index have = seq.num_frames();
+        auto tile = [&](MatrixXd& m) {
+            MatrixXd out(want, m.cols());
+            for (Index t = 0; t < want; ++t) out.row(t) = m.row(t % have);
+            m = std::move(out);
+        };
+        tile(seq.positions);
+        tile(seq.bc_positions);
+        tile(seq.bc_params);
+        tile(seq.newton);
+        seq.train_frames = int(want);
+    }
+    return data;
+}
+
+TrainingSetup& setup(const std::string& scene_name)
+{
+    static std::map<std::string, std::unique_ptr<TrainingSetup>> cache;
+    auto& slot = cache[scene_name];
+    if (slot) return *slot;
+    auto made = std::make_unique<TrainingSetup>();
+    const Scene scene = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene_name + ".toml");
+    const Dataset data = short_dataset(scene);
+    made->model = std::make_unique<PhysicsModel>(data.physics);
+    AutoencoderOptions ae;
+    ae.latent_dim = default_latent_dim(scene_name);
+    ae.hidden = {200, 200, 200};
+    ae.pca_dim = 50;
+    made->autoencoder = std::make_unique<Autoencoder>(data.physics, ae, 0);
+    const FrameSet frames = training_frames(data);
+    made->autoencoder->initialize_pca(made->autoencoder->encoding().to_features(frames.positions));
+    made->samples = make_training_samples(*made->autoencoder, data);
+    slot = std::move(made);
+    return *slot;
+}
+
+void train_epoch(benchmark::State& state, const std::string& scene_name)
+{
+    set_log_level(LogLevel::Quiet);
+    TrainingSetup* s = nullptr;
+    try {
+        s = &setup(scene_name);
+    } catch (const Error& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    IntegratorTrainOptions options;
+    options.hidden = default_integrator_hidden(scene_name);
+    options.batch_size = 256;
+    options.learning_rate = 1e-3;
+    options.progress = false;
+    LatentMlpModel net =
+        LatentMlpModel::create(s->autoencoder->latent_dim(), s->samples.p.rows(), options.hidden, options.seed);
+    IntegratorTrainer trainer(*s->model, *s->autoencoder, options);
+    trainer.prepare(net, s->samples);
+    const std::unique_ptr<nn::Learner> learner = trainer.learner(net, s->samples);
+    nn::EpochRunner runner(*learner, trainer.loop_options());
+    int epoch = 0;
+    for (auto _ : state) benchmark::DoNotOptimize(runner.run(epoch++));
+    state.counters["samples"] = double(s->samples.size());
+    state.counters["columns"] = double(runner.samples_per_epoch() * (options.training_noise ? 2 : 1));
+    state.counters["batches"] = double(runner.num_batches());
+}
+
+#define LB_TRAIN_BENCH(name) \
+    BENCHMARK_CAPTURE(train_epoch, name, #name)->Unit(benchmark::kMillisecond)->MinTime(2.0)
+
+LB_TRAIN_BENCH(cloth);
+LB_TRAIN_BENCH(cantilever);
+LB_TRAIN_BENCH(rods_translate);
+LB_TRAIN_BENCH(rods_rotate);
+LB_TRAIN_BENCH(armadillo);
+LB_TRAIN_BENCH(bunny_ears);
+
+} // namespace
+} // namespace lb
