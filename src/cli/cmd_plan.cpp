@@ -12,9 +12,9 @@ void print_unit_plan(const ExperimentConfig& ex, const ExperimentPlan& plan, boo
 {
     size_t count[3] = {0, 0, 0};
     for (const Unit& u : plan.units) ++count[int(u.kind)];
-    std::printf("suite %s: %zu sweep point%s, %zu work units (%zu scene, %zu fit, %zu eval) in %d levels\n",
-                ex.name.c_str(), plan.points, plan.points == 1 ? "" : "s", plan.units.size(), count[0], count[1],
-                count[2], plan.levels());
+    const std::string points = ex.sweep.empty() ? "no sweep" : std::to_string(plan.points) + " sweep points";
+    std::printf("suite %s: %s, %zu work units (%zu scene, %zu fit, %zu eval) in %d levels\n", ex.name.c_str(),
+                points.c_str(), plan.units.size(), count[0], count[1], count[2], plan.levels());
     for (const SweepAxis& a : ex.sweep) {
         std::printf("  sweep %s:", a.key.c_str());
         for (const std::string& v : a.values) std::printf(" %s", v.c_str());
