@@ -62,7 +62,8 @@ head -c 1024 /dev/urandom > "$state/munge/munge.key"
 chmod 400 "$state/munge/munge.key"
 socket="$state/munge/munge.socket"
 /usr/sbin/munged --foreground --force --key-file="$state/munge/munge.key" --socket="$socket" \
-  --pid-file="$state/munge/munged.pid" --log-file="$state/munged.log" --seed-file="$state/munge/munged.seed" &
+  --pid-file="$state/munge/munged.pid" --log-file="$state/munged.log" --seed-file="$state/munge/munged.seed" \
+  2>>"$state/munged.log" &
 pids+=($!)
 
 # Free TCP ports for the two daemons (another Slurm may be listening on the defaults).
@@ -107,9 +108,9 @@ PartitionName=lbtest Nodes=$node Default=YES MaxTime=INFINITE State=UP
 EOF
 for _ in $(seq 50); do [[ -S "$socket" ]] && break; sleep 0.1; done
 [[ -S "$socket" ]] || { log "munged did not start"; cat "$state/munged.log" >&2 || true; exit 1; }
-/usr/sbin/slurmctld -D -i -f "$SLURM_CONF" &
+/usr/sbin/slurmctld -D -i -f "$SLURM_CONF" 2>>"$state/slurmctld.log" &
 pids+=($!)
-/usr/sbin/slurmd -D -f "$SLURM_CONF" -N "$node" &
+/usr/sbin/slurmd -D -f "$SLURM_CONF" -N "$node" 2>>"$state/slurmd.log" &
 pids+=($!)
 log "munged, slurmctld and slurmd started (state in $state)"
 for _ in $(seq 60); do
@@ -140,7 +141,9 @@ while :; do
 done
 log "merge job $merge_job completed; every job:"
 for job in $(awk '{print $NF}' "$state/run-slurm/slurm/jobs.txt"); do
-  scontrol show job "$job" | sed -n 's/^ *\(JobId=[0-9]* .*JobName=[^ ]*\).*/  \1/p; s/^ *\(JobState=[A-Z_]*\).*\(ExitCode=[0-9:]*\).*/    \1 \2/p' >&2
+  # One line per array task: its job id, name, state and exit code.
+  scontrol -o show job "$job" | awk '{ s = " "; for (i = 1; i <= NF; ++i)
+    if ($i ~ /^(JobId|ArrayTaskId|JobName|JobState|ExitCode)=/) s = s " " $i; print s }' >&2 || true
 done
 
 # ---- stop the cluster, run locally, compare ----------------------------------------

@@ -308,6 +308,25 @@ void expand_sweep(const toml::table& root, const std::string& path, const Method
     std::vector<const toml::array*> values;
     read_sweep_axes(*sweep, "", path, ex.sweep, values);
     if (ex.sweep.empty()) throw ConfigError(path + ": key 'sweep': list at least one key to sweep");
+    {
+        // TOML tables iterate in key order; the axes keep the file's order (the first
+        // written varies slowest).
+        std::vector<size_t> order(ex.sweep.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+        auto position = [&](size_t i) {
+            const toml::source_position p = values[i]->source().begin;
+            return std::make_pair(p.line, p.column);
+        };
+        std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return position(a) < position(b); });
+        std::vector<SweepAxis> axes;
+        std::vector<const toml::array*> lists;
+        for (size_t i : order) {
+            axes.push_back(ex.sweep[i]);
+            lists.push_back(values[i]);
+        }
+        ex.sweep = std::move(axes);
+        values = std::move(lists);
+    }
     size_t count = 1;
     for (const SweepAxis& a : ex.sweep) {
         if (a.key == "seeds" && root.contains("seeds"))
