@@ -78,14 +78,25 @@ void register_submit(CLI::App& app)
             std::printf("\ndry run: nothing written, nothing submitted\n");
             return;
         }
-        const std::string sbatch = find_program("sbatch");
+        std::string sbatch;
+        try {
+            sbatch = find_program("sbatch");
+        } catch (const Error& e) {
+            throw Error(std::string("submit: ") + e.what() + " (is Slurm installed here? --dry-run prints the scripts without it)");
+        }
         write_text_atomically(plan.run_dir + "/manifest.jsonl", manifest_jsonl(ex, plan));
         write_text_atomically(plan.run_dir + "/experiment.toml", ex.toml_text);
         fs::create_directories(plan.run_dir + "/units");
         for (const SlurmJob& job : jobs) write_text_atomically(job.script_path, job.script);
-        std::string previous, ids;
+        std::string previous, ids, submitted;
         for (const SlurmJob& job : jobs) {
-            previous = submit_job(sbatch, sbatch_arguments(job, previous), plan.run_dir);
+            try {
+                previous = submit_job(sbatch, sbatch_arguments(job, previous), plan.run_dir);
+            } catch (const Error& e) {
+                if (submitted.empty()) throw;
+                throw Error(std::string(e.what()) + "\nalready submitted (cancel with scancel):" + submitted);
+            }
+            submitted += " " + previous;
             const std::string what = job.level >= 0 ? "level " + std::to_string(job.level) + " (" +
                                                           std::to_string(job.tasks) + " units)"
                                                     : std::string("merge");

@@ -267,7 +267,7 @@ toml::table point_root(const toml::table& root, const std::vector<SweepAxis>& ax
         const std::string table_key = axes[a].key.substr(0, dot), key = axes[a].key.substr(dot + 1);
         if (!out.contains(table_key)) out.insert(table_key, toml::table{});
         toml::table* t = out.get_as<toml::table>(table_key);
-        if (!t) throw ConfigError("key '" + table_key + "' must be a table");
+        if (!t) throw ConfigError("key '" + table_key + "' must be a table to sweep '" + axes[a].key + "'");
         v.visit([&](const auto& value) { t->insert_or_assign(key, value); });
     }
     return out;
@@ -339,8 +339,13 @@ void expand_sweep(const toml::table& root, const std::string& path, const Method
         for (size_t v = 0; v < ex.sweep[a].values.size(); ++v) {
             std::vector<long> choice(ex.sweep.size(), -1);
             choice[a] = long(v);
-            parse_point(point_root(root, ex.sweep, values, choice), path, registry,
-                        "key 'sweep." + ex.sweep[a].key + "' = " + ex.sweep[a].values[v]);
+            const std::string what = "key 'sweep." + ex.sweep[a].key + "' = " + ex.sweep[a].values[v];
+            try {
+                parse_point(point_root(root, ex.sweep, values, choice), path, registry, what);
+            } catch (const ConfigError& e) {
+                if (std::string(e.what()).rfind(path + ": ", 0) == 0) throw;
+                throw ConfigError(path + ": " + what + ": " + e.what());
+            }
         }
     }
     const int digits = count > 100 ? 3 : 2;

@@ -3,8 +3,12 @@
 #include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "baselines/builtin_methods.hpp"
 #include "core/error.hpp"
@@ -103,6 +107,65 @@ TEST(Slurm, DryRunPrintsTheScriptsAndWritesNothing)
     const auto bad = testing::run_cli("submit " + dir + "/suite.toml -o " + dir + "/run --dry-run --partition a;b");
     EXPECT_EQ(bad.exit_code, 1) << bad.output;
     EXPECT_NE(bad.output.find("--partition 'a;b'"), std::string::npos) << bad.output;
+}
+
+/// A stand-in for sbatch on PATH: records its arguments, prints job ids 101, 102, ...
+/// in --parsable form, and fails on call number `fail_on` (0: never).
+std::string fake_sbatch(const std::string& dir, int fail_on)
+{
+    const std::string path = dir + "/bin/sbatch";
+    std::filesystem::create_directories(dir + "/bin");
+    std::ofstream(path) << "#!/usr/bin/python3\n"
+                           "import pathlib, sys\n"
+                           "log = pathlib.Path('" << dir << "/calls.txt')\n"
+                           "calls = log.read_text().splitlines() if log.exists() else []\n"
+                           "calls.append(' '.join(sys.argv[1:]))\n"
+                           "log.write_text('\\n'.join(calls) + '\\n')\n"
+                           "if len(calls) == " << fail_on << ":\n"
+                           "    print('sbatch: error: invalid partition specified', file=sys.stderr)\n"
+                           "    sys.exit(1)\n"
+                           "print(f'{100 + len(calls)};cluster')\n";
+    ::chmod(path.c_str(), 0755);
+    return dir + "/bin";
+}
+
+std::string read_all(const std::string& path)
+{
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(Slurm, SubmitChainsTheLevelsAndTheMergeThroughSbatch)
+{
+    const std::string dir = testing::fresh_dir("slurm_submit");
+    std::ofstream(dir + "/suite.toml") << kSuite;
+    const std::string old_path = std::getenv("PATH") ? std::getenv("PATH") : "/usr/bin:/bin";
+    setenv("PATH", (fake_sbatch(dir, 0) + ":" + old_path).c_str(), 1);
+    const auto r = testing::run_cli("submit " + dir + "/suite.toml -o " + dir + "/run --max-parallel 2");
+    setenv("PATH", old_path.c_str(), 1);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("submitted level 0 (1 units): job 101"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("submitted level 2 (4 units): job 103"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("submitted merge: job 104"), std::string::npos) << r.output;
+    const std::string calls = read_all(dir + "/calls.txt");
+    EXPECT_NE(calls.find("--parsable " + dir + "/run/slurm/level0.sbatch\n"), std::string::npos) << calls;
+    EXPECT_NE(calls.find("--dependency=afterok:102 --kill-on-invalid-dep=yes " + dir + "/run/slurm/level2.sbatch"),
+              std::string::npos) << calls;
+    EXPECT_NE(calls.find("--dependency=afterok:103 --kill-on-invalid-dep=yes " + dir + "/run/slurm/merge.sbatch"),
+              std::string::npos) << calls;
+    EXPECT_NE(read_all(dir + "/run/slurm/level1.sbatch").find("#SBATCH --array=0-4%2"), std::string::npos);
+    EXPECT_NE(read_all(dir + "/run/manifest.jsonl").find("\"array_index\":4"), std::string::npos);
+    EXPECT_NE(read_all(dir + "/run/slurm/jobs.txt").find("merge 104"), std::string::npos);
+
+    // sbatch refuses the third job: exit 1 with its message and the jobs to cancel.
+    const std::string failing = testing::fresh_dir("slurm_submit_failing");
+    std::ofstream(failing + "/suite.toml") << kSuite;
+    setenv("PATH", (fake_sbatch(failing, 3) + ":" + old_path).c_str(), 1);
+    const auto f = testing::run_cli("submit " + failing + "/suite.toml -o " + failing + "/run");
+    setenv("PATH", old_path.c_str(), 1);
+    EXPECT_EQ(f.exit_code, 1) << f.output;
+    EXPECT_NE(f.output.find("invalid partition specified"), std::string::npos) << f.output;
+    EXPECT_NE(f.output.find("already submitted (cancel with scancel): 101 102"), std::string::npos) << f.output;
 }
 
 } // namespace
