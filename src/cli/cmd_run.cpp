@@ -3,6 +3,7 @@
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
 #include "pipeline/experiment.hpp"
+#include "pipeline/plan.hpp"
 #include "scene/scene.hpp"
 
 namespace lb::cli {
@@ -25,6 +26,7 @@ void print_plan(const ExperimentConfig& ex, const std::string& run_dir)
     std::printf("evaluation: sequences %s, frames %s, full_space %s\n", ex.sequences.c_str(),
                 ex.rollout_frames > 0 ? std::to_string(ex.rollout_frames).c_str() : "all",
                 ex.full_space ? "yes" : "no");
+    print_unit_plan(ex, plan_experiment(ex, resolve_run_dir(ex, run_dir)), false);
     std::printf("the configuration is valid; nothing was run\n");
 }
 
