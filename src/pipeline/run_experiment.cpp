@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
@@ -17,9 +16,7 @@
 #include "io/atomic_file.hpp"
 #include "io/hdf5.hpp"
 #include "methods/artefact.hpp"
-#include "methods/full_space/full_space_method.hpp"
 #include "nn/inference_network.hpp"
-#include "paper/scene_defaults.hpp"
 #include "pipeline/experiment.hpp"
 #include "pipeline/plan.hpp"
 #include "pipeline/plots.hpp"
