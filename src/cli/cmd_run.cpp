@@ -3,6 +3,7 @@
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
 #include "pipeline/experiment.hpp"
+#include "pipeline/plan.hpp"
 #include "scene/scene.hpp"
 
 namespace lb::cli {
@@ -25,6 +26,7 @@ void print_plan(const ExperimentConfig& ex, const std::string& run_dir)
     std::printf("evaluation: sequences %s, frames %s, full_space %s\n", ex.sequences.c_str(),
                 ex.rollout_frames > 0 ? std::to_string(ex.rollout_frames).c_str() : "all",
                 ex.full_space ? "yes" : "no");
+    print_unit_plan(ex, plan_experiment(ex, resolve_run_dir(ex, run_dir)), false);
     std::printf("the configuration is valid; nothing was run\n");
 }
 
@@ -35,7 +37,8 @@ void register_run(CLI::App& app)
     struct Args {
         std::string experiment, output;
         std::vector<std::string> force;
-        bool check = false;
+        std::string unit;
+        bool check = false, merge = false;
     };
     auto a = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("run", "Run an experiment suite: simulate, train, roll out, tables, plots (cached stages)");
@@ -43,7 +46,12 @@ void register_run(CLI::App& app)
     cmd->add_option("-o,--output", a->output, "Run directory (default: the experiment's output_dir)");
     cmd->add_option("--force", a->force,
                     "Redo a stage even if cached: simulate, autoencoder, integrators, rollouts, tables, plots, all");
-    cmd->add_flag("--check", a->check, "Validate the suite and its scenes, print the plan and run nothing");
+    CLI::Option* check = cmd->add_flag("--check", a->check, "Validate the suite and its scenes, print the plan and run nothing");
+    CLI::Option* unit = cmd->add_option("--unit", a->unit, "Run one work unit (ids: `latentbench plan`); idempotent");
+    CLI::Option* merge = cmd->add_flag("--merge", a->merge,
+                                       "Tables, figures and report from the work units' outputs; names every unit missing");
+    check->excludes(unit)->excludes(merge);
+    unit->excludes(merge);
     cmd->callback([a] {
         const ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
         if (a->check) {
@@ -53,7 +61,13 @@ void register_run(CLI::App& app)
         RunOptions options;
         options.output_dir = a->output;
         options.force.insert(a->force.begin(), a->force.end());
-        const RunResult r = run_experiment(ex, options);
+        if (!a->unit.empty()) {
+            const RunResult r = run_unit(ex, a->unit, options);
+            std::printf("unit %s: %d stages run, %d cached, %.1f s\n", a->unit.c_str(), r.stages_run, r.stages_cached,
+                        r.seconds);
+            return;
+        }
+        const RunResult r = a->merge ? merge_units(ex, options) : run_experiment(ex, options);
         std::printf("experiment %s: %d stages run, %d cached, %.1f s\n", ex.name.c_str(), r.stages_run, r.stages_cached,
                     r.seconds);
         std::printf("run directory: %s\n", r.run_dir.c_str());

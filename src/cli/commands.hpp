@@ -8,6 +8,11 @@
 
 #include "core/types.hpp"
 
+namespace lb {
+struct ExperimentConfig;
+struct ExperimentPlan;
+}
+
 namespace lb::cli {
 
 void register_simulate(CLI::App& app);
@@ -19,6 +24,11 @@ void register_diagnose(CLI::App& app);
 void register_evaluate(CLI::App& app);
 void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);
+void register_plan(CLI::App& app);
+void register_submit(CLI::App& app);
+
+/// `plan` and `submit`: the sweep and the unit counts (and with list_units each unit).
+void print_unit_plan(const ExperimentConfig& ex, const ExperimentPlan& plan, bool list_units);
 
 /// The --hidden option of train-ae: "256,256,256"; ConfigError naming
 /// the option if malformed or empty.

@@ -53,6 +53,8 @@ int main(int argc, char** argv)
     lb::cli::register_evaluate(app);
     lb::cli::register_run(app);
     lb::cli::register_train_ae(app);
+    lb::cli::register_plan(app);
+    lb::cli::register_submit(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -6,9 +6,11 @@
 // per scene, caching every stage (pipeline/stage_cache.hpp).
 //
 // The pipeline in pieces:
-//   experiment.hpp / experiment_config.cpp   the configuration and its parser
+//   experiment.hpp / experiment_config.cpp   the configuration and its parser ([sweep] too)
+//   plan.hpp                                  the suite as independent work units (manifest)
 //   stage_cache.hpp                           keys, --force, stale checkpoints
-//   run_experiment.cpp                        stage execution per scene
+//   run_experiment.cpp                        one unit's stages; merge; the local run
+//   slurm.hpp                                 sbatch scripts per dependency level
 //   report.hpp                                tables from the rollout files
 //   plots.hpp                                 figures and videos (Python scripts, posix_spawn)
 #include <cstdint>
@@ -43,6 +45,15 @@ struct AblationSpec {
     std::vector<std::string> methods;
 };
 
+/// One axis of a `[sweep]` table: a dotted key and the values it takes.
+struct SweepAxis {
+    std::string key;                  ///< "training.noise_fraction", "autoencoder.epochs" or "seeds"
+    std::vector<std::string> values;  ///< each value as TOML text, e.g. "0.05", "[32, 32]"
+};
+
+/// At most this many points in a [sweep] (the product of the axes' lengths).
+inline constexpr size_t kMaxSweepPoints = 1000;
+
 struct ExperimentConfig {
     std::string name;
     std::string description;
@@ -68,11 +79,23 @@ struct ExperimentConfig {
     /// Longest video in frames (30 fps): longer sequences are subsampled.
     int video_frames = 450;
     std::vector<AblationSpec> ablations;
+    /// `[sweep]`: the axes, in key order; their cartesian product is `points`. Empty: no sweep.
+    std::vector<SweepAxis> sweep;
+    /// One resolved configuration per sweep point (the first axis varies slowest); each
+    /// is this configuration with the point's values set and no [sweep]. Empty without one.
+    std::vector<ExperimentConfig> points;
+    std::string point_label;  ///< of a point: "p00", "p01", ... (a file-name part); "" otherwise
+    std::string point_text;   ///< of a point: "training.noise_fraction=0.05, seeds=1"
+    std::vector<std::string> point_values;  ///< of a point: its value (TOML text) per axis of `sweep`
 };
 
 /// Parse and validate; ConfigError naming the key on bad input. Each [[integrators]]
-/// entry is parsed by the method its `method` key names (default "latent_mlp").
+/// entry is parsed by the method its `method` key names (default "latent_mlp"). Every
+/// point of a [sweep] is expanded and validated too (errors name the sweep key).
 ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry);
+
+/// The configurations a suite runs: its sweep points, or the suite itself without [sweep].
+std::vector<const ExperimentConfig*> experiment_points(const ExperimentConfig& ex);
 
 /// Pipeline stages, in order (names accepted by --force).
 const std::vector<std::string>& experiment_stages();
@@ -92,6 +115,18 @@ struct RunResult {
     double seconds = 0.0;
 };
 
+/// The local run: every work unit of the suite in order (pipeline/plan.hpp), then the
+/// merge. Stages whose outputs are current are skipped (stage_cache.hpp).
 RunResult run_experiment(const ExperimentConfig& config, const RunOptions& options);
+
+/// `run --unit ID`: one work unit, after checking that the units it depends on have
+/// completed; idempotent (a completed unit does no work) and resumable (training resumes
+/// from its checkpoint). Its log is `<run_dir>/units/<ID>.log`, its state
+/// `<run_dir>/units/<ID>.status`. ConfigError for an unknown id.
+RunResult run_unit(const ExperimentConfig& config, const std::string& id, const RunOptions& options);
+
+/// `run --merge`: tables, figures and videos from the units' outputs. Error naming every
+/// unit that has not completed (and why: not run, failed, killed) before writing anything.
+RunResult merge_units(const ExperimentConfig& config, const RunOptions& options);
 
 } // namespace lb

@@ -2,8 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <sstream>
+
+#include "core/error.hpp"
 
 #include "eval/rollout.hpp"
 #include "io/toml_config.hpp"
@@ -126,9 +131,11 @@ const std::vector<std::string>& experiment_stages()
     return stages;
 }
 
-ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry)
+namespace {
+
+/// One configuration from its TOML root (a suite without [sweep], or one sweep point).
+ExperimentConfig parse_experiment(const toml::table& root, const std::string& path, const MethodRegistry& registry)
 {
-    const toml::table root = parse_toml_file(path);
     ConfigTable cfg(root, "", path);
     const std::string base = fs::path(path).parent_path().string();
     ExperimentConfig ex;
@@ -181,6 +188,206 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
     for (ConfigTable a : cfg.table_array("ablations")) ex.ablations.push_back(read_ablation(a, names));
     cfg.finish();
     return ex;
+}
+
+std::string value_text(const toml::node& value)
+{
+    if (const auto* f = value.as_floating_point()) {
+        // The shortest text that reads back as the same double: "0.1", not "0.10000000000000001".
+        const double v = f->get();
+        char text[40];
+        for (int digits = 1; digits <= 17; ++digits) {
+            std::snprintf(text, sizeof text, "%.*g", digits, v);
+            if (std::strtod(text, nullptr) == v) break;
+        }
+        std::string out = text;
+        if (out.find_first_of(".eni") == std::string::npos) out += ".0";
+        return out;
+    }
+    std::ostringstream out;
+    value.visit([&](const auto& v) { out << v; });
+    return out.str();
+}
+
+/// The [sweep] axes: dotted keys (quoted, "training.noise_fraction", or as nested
+/// tables, training.noise_fraction) naming `seeds`, a [training] or an [autoencoder]
+/// key, each a non-empty list of distinct values.
+void read_sweep_axes(const toml::table& table, const std::string& prefix, const std::string& path,
+                     std::vector<SweepAxis>& axes, std::vector<const toml::array*>& values)
+{
+    for (const auto& [k, node] : table) {
+        const std::string key = prefix + std::string(k.str());
+        auto fail = [&](const std::string& message) {
+            throw ConfigError(path + ": key 'sweep." + key + "': " + message);
+        };
+        if (const toml::table* sub = node.as_table()) {
+            read_sweep_axes(*sub, key + ".", path, axes, values);
+            continue;
+        }
+        const size_t dot = key.find('.');
+        const std::string head = key.substr(0, dot);
+        const bool known = key == "seeds" || ((head == "training" || head == "autoencoder") && dot != std::string::npos &&
+                                              key.find('.', dot + 1) == std::string::npos && dot + 1 < key.size());
+        if (!known) fail("unknown sweep key (a sweep varies 'seeds', 'training.<key>' or 'autoencoder.<key>')");
+        const toml::array* list = node.as_array();
+        if (!list) fail("must be a list of the values to sweep, e.g. [0.0, 0.1]");
+        if (list->empty()) fail("list at least one value");
+        SweepAxis axis;
+        axis.key = key;
+        for (const toml::node& v : *list) {
+            if (key == "seeds" && !(v.is_integer() && v.as_integer()->get() >= 0))
+                fail("seeds are integers >= 0 (got " + value_text(v) + ")");
+            const std::string text = value_text(v);
+            if (std::find(axis.values.begin(), axis.values.end(), text) != axis.values.end())
+                fail("duplicate value " + text);
+            axis.values.push_back(text);
+        }
+        axes.push_back(std::move(axis));
+        values.push_back(list);
+    }
+}
+
+/// `root` with the sweep's values at `choice` (an index per axis; -1 leaves the axis
+/// at the suite's own setting) and without [sweep].
+toml::table point_root(const toml::table& root, const std::vector<SweepAxis>& axes,
+                       const std::vector<const toml::array*>& values, const std::vector<long>& choice)
+{
+    toml::table out = root;
+    out.erase("sweep");
+    for (size_t a = 0; a < axes.size(); ++a) {
+        if (choice[a] < 0) continue;
+        const toml::node& v = *values[a]->get(size_t(choice[a]));
+        if (axes[a].key == "seeds") {
+            toml::array seeds;
+            seeds.push_back(*v.as_integer());
+            out.insert_or_assign("seeds", std::move(seeds));
+            continue;
+        }
+        const size_t dot = axes[a].key.find('.');
+        const std::string table_key = axes[a].key.substr(0, dot), key = axes[a].key.substr(dot + 1);
+        if (!out.contains(table_key)) out.insert(table_key, toml::table{});
+        toml::table* t = out.get_as<toml::table>(table_key);
+        if (!t) throw ConfigError("key '" + table_key + "' must be a table to sweep '" + axes[a].key + "'");
+        v.visit([&](const auto& value) { t->insert_or_assign(key, value); });
+    }
+    return out;
+}
+
+std::string point_text(const std::vector<SweepAxis>& axes, const std::vector<long>& choice)
+{
+    std::string text;
+    for (size_t a = 0; a < axes.size(); ++a) {
+        if (choice[a] < 0) continue;
+        text += (text.empty() ? "" : ", ") + axes[a].key + "=" + axes[a].values[size_t(choice[a])];
+    }
+    return text;
+}
+
+/// Parse one sweep point; an error names the sweep key (or the point) that caused it.
+ExperimentConfig parse_point(const toml::table& root, const std::string& path, const MethodRegistry& registry,
+                             const std::string& what)
+{
+    try {
+        return parse_experiment(root, path, registry);
+    } catch (const ConfigError& e) {
+        std::string inner = e.what();
+        if (inner.rfind(path + ": ", 0) == 0) inner = inner.substr(path.size() + 2);
+        throw ConfigError(path + ": " + what + ": " + inner);
+    }
+}
+
+/// Expand [sweep] into ex.points: each axis is checked alone first (so an error names
+/// its key), then every point of the product.
+void expand_sweep(const toml::table& root, const std::string& path, const MethodRegistry& registry,
+                  ExperimentConfig& ex)
+{
+    const toml::node* node = root.get("sweep");
+    if (!node) return;
+    const toml::table* sweep = node->as_table();
+    if (!sweep) throw ConfigError(path + ": key 'sweep': must be a table ([sweep])");
+    std::vector<const toml::array*> values;
+    read_sweep_axes(*sweep, "", path, ex.sweep, values);
+    if (ex.sweep.empty()) throw ConfigError(path + ": key 'sweep': list at least one key to sweep");
+    {
+        // TOML tables iterate in key order; the axes keep the file's order (the first
+        // written varies slowest).
+        std::vector<size_t> order(ex.sweep.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+        auto position = [&](size_t i) {
+            const toml::source_position p = values[i]->source().begin;
+            return std::make_pair(p.line, p.column);
+        };
+        std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return position(a) < position(b); });
+        std::vector<SweepAxis> axes;
+        std::vector<const toml::array*> lists;
+        for (size_t i : order) {
+            axes.push_back(ex.sweep[i]);
+            lists.push_back(values[i]);
+        }
+        ex.sweep = std::move(axes);
+        values = std::move(lists);
+    }
+    size_t count = 1;
+    for (const SweepAxis& a : ex.sweep) {
+        if (a.key == "seeds" && root.contains("seeds"))
+            throw ConfigError(path + ": key 'sweep.seeds': the suite also sets 'seeds'; list them in one place");
+        count *= a.values.size();
+        if (count > kMaxSweepPoints)
+            throw ConfigError(path + ": key 'sweep': more than " + std::to_string(kMaxSweepPoints) + " points");
+    }
+    for (size_t a = 0; a < ex.sweep.size(); ++a) {
+        for (size_t v = 0; v < ex.sweep[a].values.size(); ++v) {
+            std::vector<long> choice(ex.sweep.size(), -1);
+            choice[a] = long(v);
+            const std::string what = "key 'sweep." + ex.sweep[a].key + "' = " + ex.sweep[a].values[v];
+            try {
+                parse_point(point_root(root, ex.sweep, values, choice), path, registry, what);
+            } catch (const ConfigError& e) {
+                if (std::string(e.what()).rfind(path + ": ", 0) == 0) throw;
+                throw ConfigError(path + ": " + what + ": " + e.what());
+            }
+        }
+    }
+    const int digits = count > 100 ? 3 : 2;
+    for (size_t i = 0; i < count; ++i) {
+        std::vector<long> choice(ex.sweep.size());
+        size_t rest = i;
+        for (size_t a = ex.sweep.size(); a-- > 0;) {
+            choice[a] = long(rest % ex.sweep[a].values.size());
+            rest /= ex.sweep[a].values.size();
+        }
+        const std::string text = point_text(ex.sweep, choice);
+        const toml::table proot = point_root(root, ex.sweep, values, choice);
+        ExperimentConfig point = parse_point(proot, path, registry, "[sweep] point " + text);
+        char label[16];
+        std::snprintf(label, sizeof label, "p%0*zu", digits, i);
+        point.point_label = label;
+        point.point_text = text;
+        for (size_t a = 0; a < ex.sweep.size(); ++a) point.point_values.push_back(ex.sweep[a].values[size_t(choice[a])]);
+        point.toml_text = "# sweep point " + point.point_label + ": " + text + "\n" + to_toml_string(proot);
+        ex.points.push_back(std::move(point));
+    }
+}
+
+} // namespace
+
+ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry)
+{
+    const toml::table root = parse_toml_file(path);
+    toml::table base = root;
+    base.erase("sweep");
+    ExperimentConfig ex = parse_experiment(base, path, registry);
+    ex.toml_text = to_toml_string(root);
+    expand_sweep(root, path, registry, ex);
+    return ex;
+}
+
+std::vector<const ExperimentConfig*> experiment_points(const ExperimentConfig& ex)
+{
+    std::vector<const ExperimentConfig*> out;
+    for (const ExperimentConfig& p : ex.points) out.push_back(&p);
+    if (out.empty()) out.push_back(&ex);
+    return out;
 }
 
 } // namespace lb

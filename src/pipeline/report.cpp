@@ -86,13 +86,20 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
     if (seeds > 1)
         t.caption += " Methods trained once per seed (" + std::to_string(seeds) + " seeds) show " +
                      seed_statistics_text(seeds) + "; the others one run.";
+    // A [sweep]: one row per point, labelled; rows the sweep does not change are shared.
+    const bool swept = std::any_of(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return !m.point.empty(); });
+    if (swept)
+        t.caption += " Rows are labelled with their [sweep] point; 'all points' rows do not depend on the swept keys "
+                     "and ran once.";
     t.columns = {"method", "configuration", "training", "window"};
+    if (swept) t.columns.insert(t.columns.begin() + 1, "sweep point");
     for (const auto& title : summary_table_columns()) t.columns.push_back(title);
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
         const RolloutSummary s = aggregate(m.summaries);
         for (const SummaryScope window : {SummaryScope::Train, SummaryScope::Test}) {
             std::vector<TableCell> cells{m.name, m.summary, budget_cell(m.budgets), window_label(s, window)};
+            if (swept) cells.insert(cells.begin() + 1, TableCell(m.point.empty() ? "all points" : m.point));
             for (auto& c : m.per_seed.size() > 1 ? summary_table_cells_over_seeds(m.per_seed, window)
                                                  : summary_table_cells(s, window))
                 cells.push_back(std::move(c));

@@ -35,6 +35,9 @@ struct MethodResult {
     std::vector<std::uint64_t> seeds;
     std::vector<RolloutSummary> per_seed;
     std::vector<TrainingBudget> budgets;  ///< one per fit (per seed)
+    /// The sweep point of this row ("training.noise_fraction=0.05, seeds=1"); "" for a
+    /// row shared by every point, or without a [sweep].
+    std::string point;
 };
 
 struct SceneResult {

@@ -1,7 +1,10 @@
+#include <unistd.h>
+
 #include <algorithm>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <map>
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
@@ -10,12 +13,12 @@
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "eval/rollout.hpp"
+#include "io/atomic_file.hpp"
 #include "io/hdf5.hpp"
 #include "methods/artefact.hpp"
-#include "methods/full_space/full_space_method.hpp"
 #include "nn/inference_network.hpp"
-#include "paper/scene_defaults.hpp"
 #include "pipeline/experiment.hpp"
+#include "pipeline/plan.hpp"
 #include "pipeline/plots.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/stage_cache.hpp"
@@ -25,16 +28,6 @@ namespace lb {
 namespace fs = std::filesystem;
 
 namespace {
-
-/// Every resolved autoencoder option that changes the trained network.
-std::string autoencoder_key(const AutoencoderOptions& o)
-{
-    std::ostringstream s;
-    s << o.latent_dim << "|" << format_list(o.hidden) << "|" << o.pca_dim << "|" << o.batch_norm << o.residual << "|"
-      << o.epochs << "|" << o.batch_size << "|" << o.learning_rate << "|" << o.validation_fraction << "|" << o.patience
-      << "|" << o.seed;
-    return s.str();
-}
 
 double median_of(std::vector<double> v)
 {
@@ -62,219 +55,298 @@ double measure_jvp_ms(Autoencoder& ae)
     return 1e3 * median_of(times);
 }
 
-/// The stages of one scene and what the tables need from them.
-class SceneRun {
+
+/// A learned method's training budget and how it ended, from its artefact's attributes
+/// (not recorded if the method records none).
+TrainingBudget read_budget(const std::string& artefact)
+{
+    TrainingBudget b;
+    const h5::File f = h5::File::open(artefact);
+    if (!f.has_attribute("/", "epochs_run")) return b;
+    b.recorded = true;
+    b.epochs_run = f.attribute_int("/", "epochs_run");
+    if (f.has_attribute("/", "epochs_budget")) b.epochs_budget = f.attribute_int("/", "epochs_budget");
+    if (f.has_attribute("/", "train_seconds")) b.seconds = f.attribute_double("/", "train_seconds");
+    if (f.has_attribute("/", "max_seconds")) b.max_seconds = f.attribute_double("/", "max_seconds");
+    if (f.has_attribute("/", "time_limited")) b.time_limited = f.attribute_int("/", "time_limited") != 0;
+    if (f.has_attribute("/", "stopped_early")) b.stopped_early = f.attribute_int("/", "stopped_early") != 0;
+    return b;
+}
+
+/// What the units of one scene share once its scene unit has completed.
+struct LoadedScene {
+    Scene scene;
+    Dataset data;
+    std::unique_ptr<PhysicsModel> model;
+    std::shared_ptr<Autoencoder> ae;
+    AutoencoderOptions ae_options;
+};
+
+/// `<run_dir>/units/<id>.status`: "running", "done" or "failed", then details. It tells
+/// a merge why a unit has no outputs; the outputs' keys alone say whether it completed.
+std::string status_path(const std::string& run_dir, const std::string& id) { return run_dir + "/units/" + id + ".status"; }
+
+void write_status(const std::string& run_dir, const std::string& id, const std::string& status, const std::string& detail)
+{
+    char host[256] = "?";
+    gethostname(host, sizeof host - 1);
+    const std::time_t now = std::time(nullptr);
+    char date[64];
+    std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
+    write_text_atomically(status_path(run_dir, id), status + "\n" + std::string(host) + " pid " +
+                                                        std::to_string(getpid()) + " " + date + "\n" + detail + "\n");
+}
+
+/// Runs units of a plan through the stage cache; loads each scene's dataset and
+/// autoencoder once, and only from a scene unit that has completed.
+class UnitRunner {
 public:
-    SceneRun(const ExperimentConfig& ex, const SceneSpec& spec, StageCache& cache, const std::string& run_dir)
-        : m_ex(ex), m_spec(spec), m_cache(cache), m_dir(run_dir + "/" + spec.label),
-          m_scene(load_scene(spec.scene_path, {spec.variant}))
+    UnitRunner(const ExperimentConfig& ex, const ExperimentPlan& plan, StageCache& cache)
+        : m_ex(ex), m_points(experiment_points(ex)), m_plan(plan), m_cache(cache)
     {
-        fs::create_directories(m_dir + "/integrators");
-        fs::create_directories(m_dir + "/rollouts");
-        m_result.label = spec.label;
-        m_result.scene_name = m_scene.name;
     }
 
-    SceneResult run()
+    void run(const Unit& u)
     {
-        simulate();
-        train_autoencoder_stage();
-        m_evaluated = select_evaluated();
-        for (const MethodSpec& m : m_spec.methods) {
-            m.method->resolve({m_scene.name, m_ae->latent_dim()});
-            if (!m_ex.seeds.empty() && m.method->set_seed(m_ex.seeds.front())) {
-                run_seeds(m.name, *m.method);
-            } else {
-                m_result.methods.push_back(run_method(m.name, m.name, *m.method));
+        for (const std::string& dep : u.depends_on) {
+            const Unit* d = m_plan.find(dep);
+            if (!d || !unit_complete(*d))
+                throw Error("unit '" + u.id + "' needs unit '" + dep + "', which has not completed (run `latentbench run " +
+                            m_ex.source + " --unit " + dep + "` first)");
+        }
+        write_status(m_plan.run_dir, u.id, "running", "");
+        try {
+            switch (u.kind) {
+            case UnitKind::Scene: run_scene(u); break;
+            case UnitKind::Fit: run_fit(u); break;
+            case UnitKind::Eval: run_eval(u); break;
             }
+        } catch (const std::exception& e) {
+            write_status(m_plan.run_dir, u.id, "failed", e.what());
+            throw;
         }
-        if (m_ex.full_space) {
-            const std::unique_ptr<Method> reference = builtin_full_space();
-            m_result.methods.push_back(run_method("full_space", "full_space", *reference));
+        write_status(m_plan.run_dir, u.id, "done", "");
+    }
+
+    /// The tables' facts of one scene (its first scene unit) and every row of it.
+    SceneResult scene_result(size_t s)
+    {
+        const Unit& su = *m_plan.find(m_plan.scene_units[s]);
+        LoadedScene& ls = loaded(su.id);
+        SceneResult r;
+        r.label = su.scene;
+        r.scene_name = ls.scene.name;
+        r.dataset_file = su.outputs[0].file;
+        r.dofs = ls.model->num_dofs();
+        r.train_frames = ls.data.sequences.front().train_frames;
+        std::vector<double> steps;
+        for (const auto& q : ls.data.sequences) {
+            for (Index t = 1; t < q.num_frames(); ++t) steps.push_back(q.newton(t, 2));
         }
-        return std::move(m_result);
+        r.dataset_step_ms = 1e3 * median_of(steps);
+        r.latent = ls.ae->latent_dim();
+        const AutoencoderOptions& ao = ls.ae_options;
+        r.decoder_layers = format_list(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
+        r.jvp_ms = measure_jvp_ms(*ls.ae);
+        for (const PlannedRow& row : m_plan.rows) {
+            if (row.scene_index == s) r.methods.push_back(method_result(row));
+        }
+        return r;
     }
 
 private:
-    void simulate()
+    void run_scene(const Unit& u)
     {
-        m_result.dataset_file = m_dir + "/data.h5";
-        m_sim_key = fnv1a64_hex("simulate|" + m_scene.resolved_toml);
-        m_cache.run("simulate", m_spec.label + ": full-space dataset", m_result.dataset_file, m_sim_key, [&] {
+        const SceneSpec& spec = m_points[u.point_index]->scenes[u.scene_index];
+        fs::create_directories(u.scene_dir + "/integrators");
+        fs::create_directories(u.scene_dir + "/rollouts");
+        LoadedScene& ls = m_loaded[u.id];
+        ls.scene = load_scene(spec.scene_path, {spec.variant});
+        const std::string& data_file = u.outputs[0].file;
+        m_cache.run("simulate", u.scene + ": full-space dataset", data_file, u.outputs[0].key, [&] {
             SimulateOptions so;
             so.progress = log_level() >= LogLevel::Info;
-            save_dataset(simulate_scene(m_scene, so), m_result.dataset_file);
+            save_dataset(simulate_scene(ls.scene, so), data_file);
         });
-        m_data = load_dataset(m_result.dataset_file);
-        m_model = std::make_unique<PhysicsModel>(m_data.physics);
-        m_result.dofs = m_model->num_dofs();
-        m_result.train_frames = m_data.sequences.front().train_frames;
-        std::vector<double> steps;
-        for (const auto& s : m_data.sequences) {
-            for (Index t = 1; t < s.num_frames(); ++t) steps.push_back(s.newton(t, 2));
-        }
-        m_result.dataset_step_ms = 1e3 * median_of(steps);
-    }
-
-    void train_autoencoder_stage()
-    {
-        AutoencoderOptions ao = m_spec.autoencoder;
-        if (!m_spec.latent_given) ao.latent_dim = default_latent_dim(m_scene.name);
+        ls.data = load_dataset(data_file);
+        ls.model = std::make_unique<PhysicsModel>(ls.data.physics);
+        AutoencoderOptions ao = resolved_autoencoder(spec, ls.scene);
         ao.progress = log_level() >= LogLevel::Info;
-        ao.checkpoint_path = m_dir + "/ae.checkpoint.h5";
+        ao.checkpoint_path = u.scene_dir + "/ae.checkpoint.h5";
         ao.resume = !m_cache.forced("autoencoder");
-        const std::string file = m_dir + "/ae.h5";
-        m_ae_key = fnv1a64_hex(m_sim_key + "|autoencoder|" + autoencoder_key(ao));
-        m_cache.run("autoencoder", m_spec.label + ": autoencoder (latent " + std::to_string(ao.latent_dim) + ")", file,
-                    m_ae_key, [&] {
-                        Autoencoder ae(m_data.physics, ao, ao.seed);
-                        const AutoencoderTrainSummary s = train_autoencoder(ae, m_data, ao);
-                        ae.set_scene_name(m_scene.name);
+        ls.ae_options = ao;
+        const std::string& file = u.outputs[1].file;
+        m_cache.run("autoencoder", u.scene + ": autoencoder (latent " + std::to_string(ao.latent_dim) + ")", file,
+                    u.outputs[1].key, [&] {
+                        Autoencoder ae(ls.data.physics, ao, ao.seed);
+                        const AutoencoderTrainSummary s = train_autoencoder(ae, ls.data, ao);
+                        ae.set_scene_name(ls.scene.name);
                         ae.save(file);
-                        log_info("%s: autoencoder validation relative RMSE %.3e", m_spec.label.c_str(),
+                        log_info("%s: autoencoder validation relative RMSE %.3e", u.scene.c_str(),
                                  s.validation_relative_rmse);
                     });
-        m_ae = std::make_shared<Autoencoder>(Autoencoder::load(file, m_data.physics));
-        m_result.latent = m_ae->latent_dim();
-        m_result.decoder_layers = format_list(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
-        m_result.jvp_ms = measure_jvp_ms(*m_ae);
+        ls.ae = std::make_shared<Autoencoder>(Autoencoder::load(file, ls.data.physics));
     }
 
-    std::vector<size_t> select_evaluated() const
+    /// The dataset and autoencoder of a completed scene unit (loaded once).
+    LoadedScene& loaded(const std::string& scene_unit)
     {
-        try {
-            return select_sequences(m_data, m_ex.sequences);
-        } catch (const ConfigError& e) {
-            throw ConfigError(m_ex.source + ": key 'evaluation.sequences' (" + m_spec.label + "): " + e.what());
+        if (auto it = m_loaded.find(scene_unit); it != m_loaded.end() && it->second.ae) return it->second;
+        const Unit* u = m_plan.find(scene_unit);
+        if (!u || !unit_complete(*u)) throw Error("unit '" + scene_unit + "' has not completed");
+        const SceneSpec& spec = m_points[u->point_index]->scenes[u->scene_index];
+        LoadedScene& ls = m_loaded[scene_unit];
+        ls.scene = load_scene(spec.scene_path, {spec.variant});
+        ls.data = load_dataset(u->outputs[0].file);
+        ls.model = std::make_unique<PhysicsModel>(ls.data.physics);
+        ls.ae_options = resolved_autoencoder(spec, ls.scene);
+        ls.ae = std::make_shared<Autoencoder>(Autoencoder::load(u->outputs[1].file, ls.data.physics));
+        return ls;
+    }
+
+    /// The unit's method, resolved for its scene and with its seed set.
+    Method& method_of(const Unit& u, const LoadedScene& ls)
+    {
+        Method* method = nullptr;
+        if (u.full_space) {
+            if (!m_reference) m_reference = reference_method();
+            method = m_reference.get();
+        } else {
+            method = m_points[u.point_index]->scenes[u.scene_index].methods[u.method_index].method.get();
         }
+        method->resolve({ls.scene.name, ls.ae->latent_dim()});
+        if (u.seed) method->set_seed(*u.seed);
+        return *method;
     }
 
-    static std::unique_ptr<Method> builtin_full_space()
+    MethodInputs inputs_of(const Unit& u, const LoadedScene& ls, const Method& method) const
     {
-        const toml::table empty;
-        ConfigTable entry(empty, "", "full_space"), defaults(empty, "", "full_space");
-        return full_space_method().parse(entry, defaults);
-    }
-
-    /// A learned method once per seed of the suite: one table row with per-seed summaries
-    /// (files <name>.seed<k>.h5; the figures show the first seed's rollout).
-    void run_seeds(const std::string& name, Method& method)
-    {
-        MethodResult combined;
-        for (const std::uint64_t seed : m_ex.seeds) {
-            method.set_seed(seed);
-            MethodResult r = run_method(name, name + ".seed" + std::to_string(seed), method);
-            if (combined.name.empty()) {
-                combined = r;
-                combined.summaries.clear();
-            }
-            combined.summaries.insert(combined.summaries.end(), r.summaries.begin(), r.summaries.end());
-            combined.seeds.push_back(seed);
-            combined.per_seed.push_back(aggregate(r.summaries));
-            combined.budgets.push_back(r.budgets.front());
-        }
-        m_result.methods.push_back(std::move(combined));
-    }
-
-    /// The training budget and how it ended, from a learned method's artefact attributes
-    /// ("" if it records none).
-    static TrainingBudget read_budget(const std::string& artefact)
-    {
-        TrainingBudget b;
-        const h5::File f = h5::File::open(artefact);
-        if (!f.has_attribute("/", "epochs_run")) return b;
-        b.recorded = true;
-        b.epochs_run = f.attribute_int("/", "epochs_run");
-        if (f.has_attribute("/", "epochs_budget")) b.epochs_budget = f.attribute_int("/", "epochs_budget");
-        if (f.has_attribute("/", "train_seconds")) b.seconds = f.attribute_double("/", "train_seconds");
-        if (f.has_attribute("/", "max_seconds")) b.max_seconds = f.attribute_double("/", "max_seconds");
-        if (f.has_attribute("/", "time_limited")) b.time_limited = f.attribute_int("/", "time_limited") != 0;
-        if (f.has_attribute("/", "stopped_early")) b.stopped_early = f.attribute_int("/", "stopped_early") != 0;
-        return b;
-    }
-
-    /// Fit (if the method has an artefact) and roll out one method: two cached stages.
-    /// @param name  the label in tables;  @param stem  its file names (name, or name.seed<k>)
-    MethodResult run_method(const std::string& name, const std::string& stem, Method& method)
-    {
-        method.resolve({m_scene.name, m_ae->latent_dim()});
         MethodInputs in;
-        in.data = &m_data;
-        in.model = m_model.get();
-        if (method.needs_autoencoder()) in.autoencoder = m_ae;
-        in.checkpoint_path = m_dir + "/integrators/" + stem + ".checkpoint.h5";
+        in.data = &ls.data;
+        in.model = ls.model.get();
+        if (method.needs_autoencoder()) in.autoencoder = ls.ae;
+        in.checkpoint_path = u.scene_dir + "/integrators/" + u.stem + ".checkpoint.h5";
         in.resume = !m_cache.forced("integrators");
         in.progress = log_level() >= LogLevel::Info;
-        in.newton = m_scene.newton;
-        const std::string inputs_key = method.needs_autoencoder() ? m_ae_key : m_sim_key;
-        const std::string key = fnv1a64_hex(inputs_key + "|" + method.method_name() + "|" + method.options_text());
-        const std::string artefact = m_dir + "/integrators/" + stem + ".h5";
-        if (method.has_artefact()) {
-            m_cache.run("integrators", m_spec.label + ": fit '" + stem + "' (" + method.method_name() + ": " +
-                                           method.summary() + ")",
-                        artefact, key, [&] { fit_artefact(method, in, m_scene.name, artefact, m_ex.toml_text); });
+        in.newton = ls.scene.newton;
+        return in;
+    }
+
+    void run_fit(const Unit& u)
+    {
+        LoadedScene& ls = loaded(u.scene_unit);
+        Method& method = method_of(u, ls);
+        const MethodInputs in = inputs_of(u, ls, method);
+        const std::string& artefact = u.outputs[0].file;
+        const std::string& config_text = m_points[u.point_index]->toml_text;
+        m_cache.run("integrators",
+                    u.scene + ": fit '" + u.stem + "' (" + method.method_name() + ": " + method.summary() + ")", artefact,
+                    u.outputs[0].key, [&] { fit_artefact(method, in, ls.scene.name, artefact, config_text); });
+    }
+
+    void run_eval(const Unit& u)
+    {
+        LoadedScene& ls = loaded(u.scene_unit);
+        Method& method = method_of(u, ls);
+        const MethodInputs in = inputs_of(u, ls, method);
+        const ExperimentConfig& point = *m_points[u.point_index];
+        std::vector<size_t> evaluated;
+        try {
+            evaluated = select_sequences(ls.data, point.sequences);
+        } catch (const ConfigError& e) {
+            throw ConfigError(m_ex.source + ": key 'evaluation.sequences' (" + u.scene + "): " + e.what());
         }
-        MethodResult mr;
-        mr.name = name;
-        mr.method = method.method_name();
-        mr.summary = method.summary();
-        mr.layers = method.layers();
-        mr.paper_method = method.is_paper_method();
-        mr.rollout_file = m_dir + "/rollouts/" + stem + ".h5";
-        mr.budgets.push_back(method.has_artefact() ? read_budget(artefact) : TrainingBudget{});
-        const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames) +
-                                              "|format " + std::to_string(kRolloutFormatVersion));
-        mr.rollout_key = rkey;
-        m_cache.run("rollouts", m_spec.label + ": rollout '" + stem + "'", mr.rollout_file, rkey, [&] {
+        const std::string& file = u.outputs[0].file;
+        m_cache.run("rollouts", u.scene + ": rollout '" + u.stem + "'", file, u.outputs[0].key, [&] {
             std::unique_ptr<Integrator> integrator;
-            if (method.has_artefact()) {
-                const h5::File f = h5::File::open(artefact);
-                integrator = method.load(in, &f, stem);
+            if (!u.fit_unit.empty()) {
+                const h5::File f = h5::File::open(m_plan.find(u.fit_unit)->outputs[0].file);
+                integrator = method.load(in, &f, u.stem);
             } else {
-                integrator = method.load(in, nullptr, stem);
+                integrator = method.load(in, nullptr, u.stem);
             }
             RolloutOptions ro;
-            ro.max_frames = m_ex.rollout_frames;
+            ro.max_frames = point.rollout_frames;
             std::vector<RolloutResult> rolls;
-            for (size_t k : m_evaluated) rolls.push_back(rollout(*integrator, *m_model, m_data.sequences[k], ro));
-            save_rollouts(rolls, mr.rollout_file, m_ex.toml_text);
+            for (size_t k : evaluated) rolls.push_back(rollout(*integrator, *ls.model, ls.data.sequences[k], ro));
+            save_rollouts(rolls, file, point.toml_text);
             const std::string line = method.after_rollout(*integrator);
-            if (!line.empty()) log_info("%s: %s: %s", m_spec.label.c_str(), name.c_str(), line.c_str());
+            if (!line.empty()) log_info("%s: %s: %s", u.scene.c_str(), u.method.c_str(), line.c_str());
         });
-        for (const RolloutRecord& rec : load_rollout_summaries(mr.rollout_file)) mr.summaries.push_back(rec.summary);
+    }
+
+    /// A table row from its eval units' files: one summary per sequence and seed, and
+    /// with seeds the per-seed statistics and budgets (the figures use the first seed).
+    MethodResult method_result(const PlannedRow& row)
+    {
+        MethodResult mr;
+        for (size_t k = 0; k < row.eval_units.size(); ++k) {
+            const Unit& u = *m_plan.find(row.eval_units[k]);
+            if (k == 0) {
+                const Method& method = method_of(u, loaded(u.scene_unit));
+                mr.name = row.name;
+                mr.method = method.method_name();
+                mr.summary = method.summary();
+                mr.layers = method.layers();
+                mr.paper_method = method.is_paper_method();
+                mr.rollout_file = u.outputs[0].file;
+                mr.rollout_key = u.outputs[0].key;
+                mr.point = row.point_text;
+            }
+            std::vector<RolloutSummary> summaries;
+            for (const RolloutRecord& rec : load_rollout_summaries(u.outputs[0].file)) summaries.push_back(rec.summary);
+            mr.summaries.insert(mr.summaries.end(), summaries.begin(), summaries.end());
+            mr.budgets.push_back(u.fit_unit.empty() ? TrainingBudget{}
+                                                    : read_budget(m_plan.find(u.fit_unit)->outputs[0].file));
+            if (!row.seeds.empty()) {
+                mr.seeds.push_back(row.seeds[k]);
+                mr.per_seed.push_back(aggregate(summaries));
+            }
+        }
         return mr;
     }
 
     const ExperimentConfig& m_ex;
-    const SceneSpec& m_spec;
+    std::vector<const ExperimentConfig*> m_points;
+    const ExperimentPlan& m_plan;
     StageCache& m_cache;
-    std::string m_dir;
-    Scene m_scene;
-    SceneResult m_result;
-    Dataset m_data;
-    std::unique_ptr<PhysicsModel> m_model;
-    std::shared_ptr<Autoencoder> m_ae;
-    std::string m_sim_key, m_ae_key;
-    std::vector<size_t> m_evaluated;
+    std::map<std::string, LoadedScene> m_loaded;
+    std::unique_ptr<Method> m_reference;
 };
 
-} // namespace
-
-RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
+/// Why a unit has not completed, from its status file.
+std::string unit_problem(const ExperimentPlan& plan, const Unit& u)
 {
-    Timer total;
-    StageCache cache(options.force);
-    if (ex.threads > 0) set_num_threads(ex.threads);
-    RunResult result;
-    result.run_dir = options.output_dir.empty() ? ex.output_dir : options.output_dir;
-    if (fs::path(result.run_dir).is_relative()) result.run_dir = (fs::current_path() / result.run_dir).string();
-    fs::create_directories(result.run_dir);
-    set_log_file(result.run_dir + "/run.log");
-    log_info("experiment '%s' -> %s (log: run.log)", ex.name.c_str(), result.run_dir.c_str());
-    std::ofstream(result.run_dir + "/experiment.toml") << ex.toml_text;
+    std::ifstream in(status_path(plan.run_dir, u.id));
+    std::string status, where, detail, line;
+    if (!std::getline(in, status)) return "not run";
+    std::getline(in, where);
+    while (std::getline(in, line)) detail += (detail.empty() ? "" : " ") + line;
+    const std::string log = " (log: " + plan.run_dir + "/units/" + u.id + ".log)";
+    if (status == "failed") return "failed on " + where + ": " + detail + log;
+    if (status == "running")
+        return "started on " + where + " and did not finish (killed, pre-empted or still running)" + log;
+    return "ran (" + where + "), but its outputs are missing or were made with another configuration" + log;
+}
 
+/// Every table, figure and video of the suite from its units' outputs.
+void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitRunner& runner, StageCache& cache,
+                   RunResult& result)
+{
+    std::vector<std::string> problems;
+    for (const Unit& u : plan.units) {
+        if (!unit_complete(u)) problems.push_back("  " + u.id + ": " + unit_problem(plan, u));
+    }
+    if (!problems.empty()) {
+        std::string message = std::to_string(problems.size()) + " of " + std::to_string(plan.units.size()) +
+                              " work units of " + ex.source + " have not completed, so nothing was merged:\n";
+        for (const std::string& p : problems) message += p + "\n";
+        message += "run each with `latentbench run " + ex.source + " -o " + plan.run_dir +
+                   " --unit ID` (or submit again), then merge again";
+        throw Error(message);
+    }
     std::vector<SceneResult> scenes;
-    for (const SceneSpec& spec : ex.scenes) scenes.push_back(SceneRun(ex, spec, cache, result.run_dir).run());
+    for (size_t s = 0; s < ex.scenes.size(); ++s) scenes.push_back(runner.scene_result(s));
 
     result.tables = write_tables(ex, scenes, result.run_dir + "/tables");
     log_info("[tables] %zu tables in %s/tables", result.tables.size(), result.run_dir.c_str());
@@ -304,13 +376,88 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
         }
         log_info("[videos] %zu videos in %s/videos", result.videos.size(), result.run_dir.c_str());
     }
-    result.stages_run = cache.ran();
-    result.stages_cached = cache.cached();
-    result.seconds = total.seconds();
-    log_info("experiment '%s' finished in %.1f s: %d stages run, %d cached", ex.name.c_str(), result.seconds,
-             result.stages_run, result.stages_cached);
-    set_log_file("");
-    return result;
+}
+
+/// What every entry point does first: the run directory, its log, the plan.
+struct Session {
+    Timer total;
+    StageCache cache;
+    RunResult result;
+    ExperimentPlan plan;
+
+    Session(const ExperimentConfig& ex, const RunOptions& options, const std::string& log_name) : cache(options.force)
+    {
+        if (ex.threads > 0) set_num_threads(ex.threads);
+        result.run_dir = resolve_run_dir(ex, options.output_dir);
+        fs::create_directories(result.run_dir + "/units");
+        set_log_file(result.run_dir + "/" + log_name);
+        plan = plan_experiment(ex, result.run_dir);
+    }
+
+    RunResult finish(const ExperimentConfig& ex, const std::string& what)
+    {
+        result.stages_run = cache.ran();
+        result.stages_cached = cache.cached();
+        result.seconds = total.seconds();
+        log_info("%s '%s' finished in %.1f s: %d stages run, %d cached", what.c_str(), ex.name.c_str(), result.seconds,
+                 result.stages_run, result.stages_cached);
+        set_log_file("");
+        return result;
+    }
+};
+
+} // namespace
+
+RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
+{
+    Session session(ex, options, "run.log");
+    log_info("experiment '%s' -> %s (log: run.log): %zu work units", ex.name.c_str(), session.result.run_dir.c_str(),
+             session.plan.units.size());
+    write_text_atomically(session.result.run_dir + "/experiment.toml", ex.toml_text);
+    UnitRunner runner(ex, session.plan, session.cache);
+    try {
+        for (const Unit& u : session.plan.units) runner.run(u);
+        merge_outputs(ex, session.plan, runner, session.cache, session.result);
+    } catch (...) {
+        set_log_file("");
+        throw;
+    }
+    return session.finish(ex, "experiment");
+}
+
+RunResult run_unit(const ExperimentConfig& ex, const std::string& id, const RunOptions& options)
+{
+    Session session(ex, options, "units/" + id + ".log");
+    const Unit* u = session.plan.find(id);
+    if (!u) {
+        set_log_file("");
+        throw ConfigError(ex.source + ": no work unit '" + id + "' (`latentbench plan " + ex.source + "` lists them)");
+    }
+    log_info("unit '%s' of '%s' -> %s", id.c_str(), ex.name.c_str(), session.result.run_dir.c_str());
+    UnitRunner runner(ex, session.plan, session.cache);
+    try {
+        runner.run(*u);
+    } catch (...) {
+        set_log_file("");
+        throw;
+    }
+    return session.finish(ex, "unit " + id + " of");
+}
+
+RunResult merge_units(const ExperimentConfig& ex, const RunOptions& options)
+{
+    Session session(ex, options, "run.log");
+    log_info("merging the %zu work units of '%s' in %s", session.plan.units.size(), ex.name.c_str(),
+             session.result.run_dir.c_str());
+    write_text_atomically(session.result.run_dir + "/experiment.toml", ex.toml_text);
+    UnitRunner runner(ex, session.plan, session.cache);
+    try {
+        merge_outputs(ex, session.plan, runner, session.cache, session.result);
+    } catch (...) {
+        set_log_file("");
+        throw;
+    }
+    return session.finish(ex, "merge of");
 }
 
 } // namespace lb

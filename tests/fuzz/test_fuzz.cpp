@@ -644,7 +644,7 @@ TEST(Fuzz, SuiteToml)
 {
     const std::string ex = kSource + "/experiments/";
     const std::string run_dir = fresh_dir("fuzz_suite_run");
-    fuzz_toml("suite_toml", {ex + "quickstart.toml", ex + "ablations.toml", ex + "paper_cloth.toml"},
+    fuzz_toml("suite_toml", {ex + "quickstart.toml", ex + "ablations.toml", ex + "paper_cloth.toml", ex + "sweep_noise.toml"},
               [&](const std::string&, const std::string& mutated) {
                   return "run " + mutated + " --check -o " + run_dir + "/run";
               });

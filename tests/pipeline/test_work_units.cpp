@@ -1,0 +1,291 @@
+// Work units, sweeps and the merge (issue 15): `plan`, `run --unit`, `run --merge`.
+#include "lb_paths.hpp"
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "baselines/builtin_methods.hpp"
+#include "core/error.hpp"
+#include "core/log.hpp"
+#include "pipeline/experiment.hpp"
+#include "pipeline/plan.hpp"
+#include "support/cli_runner.hpp"
+
+namespace lb {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::fresh_dir;
+using testing::run_cli;
+using testing::run_program;
+
+/// A tiny suite: the self-supervised MLP and linear PCA on the small cantilever, with a
+/// sweep of the training noise × two seeds (4 points).
+const char* kSwept = R"(
+name = "swept"
+[autoencoder]
+hidden = [16]
+pca = 8
+epochs = 20
+batch = 16
+learning_rate = 1.0e-3
+[training]
+epochs = 5
+hidden = [16]
+learning_rate = 1.0e-3
+[[integrators]]
+name = "ours"
+[[integrators]]
+name = "pca"
+method = "linear_pca"
+[[scenes]]
+scene = "experiments/scenes/cantilever.toml"
+variant = "small"
+[evaluation]
+frames = 40
+[outputs]
+plots = false
+[sweep]
+"training.noise_fraction" = [0.0, 0.2]
+seeds = [3, 4]
+)";
+
+std::string write_suite(const std::string& name, const std::string& text)
+{
+    const std::string dir = fresh_dir("units_" + name);
+    std::ofstream(dir + "/suite.toml") << text;
+    return dir + "/suite.toml";
+}
+
+std::string read_all(const std::string& path)
+{
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to)
+{
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
+TEST(WorkUnits, PlanExpandsTheSweepAndSharesWhatItDoesNotTouch)
+{
+    const std::string path = write_suite("plan", kSwept);
+    const ExperimentConfig ex = load_experiment(path, builtin_methods());
+    ASSERT_EQ(ex.sweep.size(), 2u);
+    EXPECT_EQ(ex.sweep[0].key, "training.noise_fraction");  // the file's order, not the key order
+    ASSERT_EQ(ex.points.size(), 4u);
+    EXPECT_EQ(ex.points[1].point_label, "p01");
+    EXPECT_EQ(ex.points[1].point_text, "training.noise_fraction=0.0, seeds=4");  // the first axis varies slowest
+    EXPECT_EQ(ex.points[2].point_text, "training.noise_fraction=0.2, seeds=3");
+
+    const ExperimentPlan plan = plan_experiment(ex, fresh_dir("units_plan_run"));
+    // 1 scene; ours: 4 fits + 4 rollouts (one per point); pca (no seed, no training key):
+    // 1 fit + 1 rollout shared by every point; full_space: 1 rollout.
+    EXPECT_EQ(plan.points, 4u);
+    ASSERT_EQ(plan.units.size(), 12u);
+    EXPECT_EQ(plan.levels(), 3);
+    const Unit* fit = plan.find("fit.cantilever_small.ours.p02.seed3");
+    ASSERT_NE(fit, nullptr);
+    EXPECT_EQ(fit->depends_on, std::vector<std::string>{"scene.cantilever_small"});
+    EXPECT_EQ(fit->level, 1);
+    const Unit* eval = plan.find("eval.cantilever_small.ours.p02.seed3");
+    ASSERT_NE(eval, nullptr);
+    EXPECT_EQ(eval->depends_on, std::vector<std::string>{fit->id});
+    EXPECT_EQ(eval->level, 2);
+    const Unit* pca = plan.find("eval.cantilever_small.pca");
+    ASSERT_NE(pca, nullptr);
+    EXPECT_TRUE(pca->point.empty());
+    const Unit* reference = plan.find("eval.cantilever_small.full_space");
+    ASSERT_NE(reference, nullptr);
+    EXPECT_EQ(reference->level, 1);  // nothing to fit: right after the scene
+    // Distinct points have distinct keys (the swept value reaches the method's options).
+    EXPECT_NE(plan.find("fit.cantilever_small.ours.p00.seed3")->outputs[0].key,
+              plan.find("fit.cantilever_small.ours.p02.seed3")->outputs[0].key);
+    // Array indices number each level's units from 0.
+    for (int level = 0; level < plan.levels(); ++level) {
+        int next = 0;
+        for (const Unit& u : plan.units) {
+            if (u.level == level) {
+                EXPECT_EQ(u.array_index, next++) << u.id;
+            }
+        }
+    }
+
+    // The CLI prints the count before anything runs and writes one JSON line per unit.
+    const std::string run_dir = fresh_dir("units_plan_cli");
+    const auto r = run_cli("plan " + path + " -o " + run_dir);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("4 sweep points, 12 work units (1 scene, 5 fit, 6 eval) in 3 levels"), std::string::npos)
+        << r.output;
+    const std::string manifest = read_all(run_dir + "/manifest.jsonl");
+    std::istringstream lines(manifest);
+    int count = 0;
+    for (std::string line; std::getline(lines, line); ++count) {
+        EXPECT_EQ(line.front(), '{');
+        EXPECT_NE(line.find("\"depends_on\":["), std::string::npos) << line;
+    }
+    EXPECT_EQ(count, 12);
+    EXPECT_NE(manifest.find("\"id\":\"eval.cantilever_small.ours.p03.seed4\",\"kind\":\"eval\",\"level\":2"),
+              std::string::npos);
+    EXPECT_NE(manifest.find("\"sweep\":{\"training.noise_fraction\":\"0.2\",\"seeds\":\"4\"}"), std::string::npos);
+    EXPECT_FALSE(fs::exists(run_dir + "/cantilever_small"));  // nothing ran
+}
+
+TEST(WorkUnits, AutoencoderSweepPlansOneSceneUnitPerAutoencoder)
+{
+    std::string text = replaced(kSwept, "seeds = [3, 4]", "\"autoencoder.epochs\" = [10, 20]");
+    const ExperimentPlan plan =
+        plan_experiment(load_experiment(write_suite("ae_sweep", text), builtin_methods()), fresh_dir("units_ae_run"));
+    ASSERT_NE(plan.find("scene.cantilever_small.p00"), nullptr);
+    ASSERT_NE(plan.find("scene.cantilever_small.p01"), nullptr);
+    EXPECT_EQ(plan.find("scene.cantilever_small.p02"), nullptr);  // p02 trains the autoencoder p00 trains
+    EXPECT_EQ(plan.find("fit.cantilever_small.ours.p02")->depends_on,
+              std::vector<std::string>{"scene.cantilever_small.p00"});
+}
+
+TEST(WorkUnits, MalformedSweepIsRefusedNamingFileAndKey)
+{
+    struct Case {
+        const char* sweep;
+        const char* expected;
+    };
+    const Case cases[] = {
+        {"\"training.noise_fractoin\" = [0.1]", "training.noise_fractoin"},
+        {"\"physics.dt\" = [0.1]", "sweep.physics.dt': unknown sweep key"},
+        {"\"training.noise_fraction\" = 0.1", "must be a list"},
+        {"\"training.noise_fraction\" = []", "at least one value"},
+        {"\"training.noise_fraction\" = [0.1, 0.1]", "duplicate value 0.1"},
+        {"\"training.epochs\" = [\"many\"]", "training.epochs"},
+        {"seeds = [-1]", "seeds are integers >= 0"},
+        {"\"autoencoder.epochs\" = [1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,25,26,27,28,29,30,31,32]\n"
+         "\"training.epochs\" = [1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,25,26,27,28,29,30,31,32]",
+         "more than 1000 points"},
+    };
+    for (const Case& c : cases) {
+        const std::string text = replaced(replaced(kSwept, "\"training.noise_fraction\" = [0.0, 0.2]\n", ""),
+                                          "seeds = [3, 4]", c.sweep);
+        const std::string path = write_suite("bad_sweep", text);
+        try {
+            load_experiment(path, builtin_methods());
+            ADD_FAILURE() << "expected ConfigError for " << c.sweep;
+        } catch (const ConfigError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(path), std::string::npos) << what;
+            EXPECT_NE(what.find(c.expected), std::string::npos) << c.sweep << "\n" << what;
+        }
+    }
+    // Seeds in two places; the CLI exits 1 with the message and writes no manifest.
+    const std::string path = write_suite("bad_seeds", replaced(kSwept, "name = \"swept\"", "name = \"swept\"\nseeds = [1]"));
+    const std::string run_dir = fresh_dir("units_bad_seeds_run");
+    const auto r = run_cli("plan " + path + " -o " + run_dir);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("sweep.seeds"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(run_dir + "/manifest.jsonl"));
+}
+
+TEST(WorkUnits, UnitRunsOnceAndOnlyAfterItsDependencies)
+{
+    set_log_level(LogLevel::Quiet);
+    const ExperimentConfig ex = load_experiment(write_suite("idempotent", kSwept), builtin_methods());
+    RunOptions options;
+    options.output_dir = fresh_dir("units_idempotent_run");
+    const ExperimentPlan plan = plan_experiment(ex, options.output_dir);
+
+    // A unit whose dependency has not run is refused, naming the dependency.
+    try {
+        run_unit(ex, "fit.cantilever_small.ours.p00.seed3", options);
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'scene.cantilever_small', which has not completed"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(run_unit(ex, "fit.nothing", options), ConfigError);
+
+    for (const Unit& u : plan.units) {
+        const RunResult first = run_unit(ex, u.id, options);
+        EXPECT_EQ(first.stages_run, u.kind == UnitKind::Scene ? 2 : 1) << u.id;
+        EXPECT_TRUE(unit_complete(u)) << u.id;
+        const RunResult again = run_unit(ex, u.id, options);
+        EXPECT_EQ(again.stages_run, 0) << u.id;
+        EXPECT_EQ(again.stages_cached, first.stages_run) << u.id;
+        EXPECT_NE(read_all(options.output_dir + "/units/" + u.id + ".status").find("done"), std::string::npos);
+        EXPECT_TRUE(fs::exists(options.output_dir + "/units/" + u.id + ".log")) << u.id;
+    }
+    // The local run of the same suite into the same directory finds every unit done.
+    const RunResult local = run_experiment(ex, options);
+    EXPECT_EQ(local.stages_run, 0);
+    const std::string table = read_all(options.output_dir + "/tables/methods_cantilever_small.md");
+    EXPECT_NE(table.find("| sweep point "), std::string::npos) << table;
+    EXPECT_NE(table.find("training.noise_fraction=0.2, seeds=4"), std::string::npos) << table;
+    EXPECT_NE(table.find("all points"), std::string::npos) << table;  // pca and full_space
+}
+
+TEST(WorkUnits, MergeNamesEveryMissingOrFailedUnitAndWritesNothing)
+{
+    const std::string path = write_suite("merge_missing", kSwept);
+    const std::string run_dir = fresh_dir("units_merge_missing_run");
+    const std::string prefix = "-q run " + path + " -o " + run_dir;
+    ASSERT_EQ(run_cli(prefix + " --unit scene.cantilever_small").exit_code, 0);
+    ASSERT_EQ(run_cli(prefix + " --unit fit.cantilever_small.pca").exit_code, 0);
+    // A damaged artefact: its eval unit fails, and says so in its status.
+    const std::string artefact = run_dir + "/cantilever_small/integrators/pca.h5";
+    fs::resize_file(artefact, 100);
+    const auto failed = run_cli(prefix + " --unit eval.cantilever_small.pca");
+    EXPECT_EQ(failed.exit_code, 1) << failed.output;
+
+    const auto merge = run_cli(prefix + " --merge");
+    EXPECT_EQ(merge.exit_code, 1) << merge.output;
+    EXPECT_NE(merge.output.find("10 of 12 work units"), std::string::npos) << merge.output;
+    EXPECT_NE(merge.output.find("eval.cantilever_small.full_space: not run"), std::string::npos) << merge.output;
+    EXPECT_NE(merge.output.find("fit.cantilever_small.ours.p03.seed4: not run"), std::string::npos) << merge.output;
+    EXPECT_NE(merge.output.find("eval.cantilever_small.pca: failed on "), std::string::npos) << merge.output;
+    EXPECT_EQ(merge.output.find("scene.cantilever_small:"), std::string::npos) << merge.output;  // complete
+    EXPECT_FALSE(fs::exists(run_dir + "/tables"));
+}
+
+TEST(WorkUnits, MergedUnitsGiveTheLocalRunsTables)
+{
+    const std::string path = write_suite("merge_equal", kSwept);
+    const std::string local = fresh_dir("units_merge_equal_local"), units = fresh_dir("units_merge_equal_units");
+    const auto run = run_cli("-q run " + path + " -o " + local);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+
+    // Each unit in its own process, the levels in reverse order of their listing within a
+    // level (any order that respects the dependencies must do), then the merge.
+    const ExperimentPlan plan = plan_experiment(load_experiment(path, builtin_methods()), units);
+    for (int level = 0; level < plan.levels(); ++level) {
+        for (auto u = plan.units.rbegin(); u != plan.units.rend(); ++u) {
+            if (u->level != level) continue;
+            const auto r = run_cli("-q run " + path + " -o " + units + " --unit " + u->id);
+            ASSERT_EQ(r.exit_code, 0) << u->id << "\n" << r.output;
+        }
+    }
+    const auto merge = run_cli("-q run " + path + " -o " + units + " --merge");
+    ASSERT_EQ(merge.exit_code, 0) << merge.output;
+    const auto compare = run_program({"/usr/bin/python3", std::string(LB_SOURCE_DIR) + "/scripts/compare_tables.py",
+                                      local + "/tables", units + "/tables"});
+    EXPECT_EQ(compare.exit_code, 0) << compare.output;
+    EXPECT_NE(compare.output.find("tables equal: 3 CSV files"), std::string::npos) << compare.output;
+
+    // The comparison can fail: one changed value is found.
+    const std::string csv = units + "/tables/methods_cantilever_small.csv";
+    std::string text = read_all(csv);
+    const size_t row = text.find("\nours,");
+    ASSERT_NE(row, std::string::npos);
+    text.replace(row, 6, "\nOURS,");
+    std::ofstream(csv) << text;
+    const auto differs = run_program({"/usr/bin/python3", std::string(LB_SOURCE_DIR) + "/scripts/compare_tables.py",
+                                      local + "/tables", units + "/tables"});
+    EXPECT_EQ(differs.exit_code, 1) << differs.output;
+    EXPECT_NE(differs.output.find("'method': 'ours' vs 'OURS'"), std::string::npos) << differs.output;
+}
+
+} // namespace
+} // namespace lb
