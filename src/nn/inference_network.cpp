@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include <omp.h>
+
 #if defined(__AVX__) && defined(__FMA__)
 #include <immintrin.h>
 #define LB_NN_AVX_FMA 1
@@ -574,6 +576,18 @@ void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, 
     }
 }
 
+namespace {
+
+/// Column blocks for the batched passes: the threads available outside a parallel region
+/// (one block inside one, or for small batches); each block runs every op on its columns.
+int column_blocks(Index columns)
+{
+    if (omp_in_parallel() || columns < 64) return 1;
+    return int(std::min<Index>(omp_get_max_threads(), columns / 32));
+}
+
+} // namespace
+
 template <typename S>
 void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, Matrix& Y, bool record)
 {
@@ -584,30 +598,35 @@ void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, 
     m_batch.resize(m_buffers.size());
     m_batch_pre.resize(m_ops.size());
     m_batch[0] = X;
+    for (std::size_t b = 1; b < m_batch.size(); ++b) m_batch[b].resize(m_buffer_size[b], B);
     for (std::size_t i = 0; i < m_ops.size(); ++i) {
-        const Op& op = m_ops[i];
-        const Matrix& src = m_batch[static_cast<std::size_t>(op.src)];
-        Matrix& dst = m_batch[static_cast<std::size_t>(op.dst)];
-        switch (op.kind) {
-        case Op::Kind::affine:
-            if (op.accumulate) {
-                dst.noalias() += op.W * src;
-            } else {
-                dst.resize(op.out, B);
-                dst.noalias() = op.W * src;
+        if (record && m_ops[i].act != ActivationKind::identity) m_batch_pre[i].resize(m_ops[i].out, B);
+    }
+    const int blocks = column_blocks(B);
+#pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
+    for (int block = 0; block < blocks; ++block) {
+        const Index c0 = B * block / blocks, n = B * (block + 1) / blocks - c0;
+        for (std::size_t i = 0; i < m_ops.size(); ++i) {
+            const Op& op = m_ops[i];
+            const auto src = m_batch[static_cast<std::size_t>(op.src)].middleCols(c0, n);
+            auto dst = m_batch[static_cast<std::size_t>(op.dst)].middleCols(c0, n);
+            switch (op.kind) {
+            case Op::Kind::affine:
+                if (op.accumulate)
+                    dst.noalias() += op.W * src;
+                else
+                    dst.noalias() = op.W * src;
+                dst.colwise() += op.b.head(op.out);
+                break;
+            case Op::Kind::scale: dst = (src.array().colwise() * op.b.array()).colwise() + op.t.array(); break;
+            case Op::Kind::act: dst = src; break;
+            case Op::Kind::add: dst += src; break;
             }
-            dst.colwise() += op.b.head(op.out);
-            break;
-        case Op::Kind::scale:
-            dst = (src.array().colwise() * op.b.array()).colwise() + op.t.array();
-            break;
-        case Op::Kind::act: dst = src; break;
-        case Op::Kind::add: dst += src; break;
-        }
-        if (op.act != ActivationKind::identity) {
-            if (record) m_batch_pre[i] = dst;
-            auto a = dst.array();
-            apply_activation(op.act, a);
+            if (op.act != ActivationKind::identity) {
+                if (record) m_batch_pre[i].middleCols(c0, n) = dst;
+                auto a = dst.array();
+                apply_activation(op.act, a);
+            }
         }
     }
     Y.swap(m_batch[static_cast<std::size_t>(m_output)]);
@@ -622,7 +641,7 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
         throw std::invalid_argument("InferenceNetwork::vjp_batch: dY must be out_features × the columns of the last "
                                     "recorded forward_batch");
     m_batch_adjoint.resize(m_buffers.size());
-    for (std::size_t b = 0; b < m_batch_adjoint.size(); ++b) m_batch_adjoint[b].setZero(m_buffer_size[b], B);
+    for (std::size_t b = 0; b < m_batch_adjoint.size(); ++b) m_batch_adjoint[b].resize(m_buffer_size[b], B);
     // The output layer (the PCA layer) reads dY directly when it alone writes the output.
     std::size_t end = m_ops.size();
     const Op& last = m_ops.back();
@@ -630,31 +649,38 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
                   last.dst == m_output;
     for (std::size_t i = 0; direct && i + 1 < m_ops.size(); ++i)
         if (m_ops[i].dst == m_output) direct = false;
-    if (direct) {
-        m_batch_adjoint[static_cast<std::size_t>(last.src)].noalias() += last.W.transpose() * dY;
-        --end;
-    } else {
-        m_batch_adjoint[static_cast<std::size_t>(m_output)] = dY;
-    }
-    for (std::size_t i = end; i-- > 0;) {
-        const Op& op = m_ops[i];
-        Matrix& a_dst = m_batch_adjoint[static_cast<std::size_t>(op.dst)];
-        Matrix& a_src = m_batch_adjoint[static_cast<std::size_t>(op.src)];
-        multiply_by_derivative(op.act, m_batch_pre[i].array(), a_dst.array());
-        switch (op.kind) {
-        case Op::Kind::affine:
-            a_src.noalias() += op.W.transpose() * a_dst;
-            if (!op.accumulate) a_dst.setZero();
-            break;
-        case Op::Kind::scale:
-            a_src += op.b.head(op.in).asDiagonal() * a_dst;
-            a_dst.setZero();
-            break;
-        case Op::Kind::act:
-            a_src += a_dst;
-            a_dst.setZero();
-            break;
-        case Op::Kind::add: a_src += a_dst; break;
+    if (direct) --end;
+    const int blocks = column_blocks(B);
+#pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
+    for (int block = 0; block < blocks; ++block) {
+        const Index c0 = B * block / blocks, n = B * (block + 1) / blocks - c0;
+        for (Matrix& a : m_batch_adjoint) a.middleCols(c0, n).setZero();
+        if (direct)
+            m_batch_adjoint[static_cast<std::size_t>(last.src)].middleCols(c0, n).noalias() +=
+                last.W.transpose() * dY.middleCols(c0, n);
+        else
+            m_batch_adjoint[static_cast<std::size_t>(m_output)].middleCols(c0, n) = dY.middleCols(c0, n);
+        for (std::size_t i = end; i-- > 0;) {
+            const Op& op = m_ops[i];
+            auto a_dst = m_batch_adjoint[static_cast<std::size_t>(op.dst)].middleCols(c0, n);
+            auto a_src = m_batch_adjoint[static_cast<std::size_t>(op.src)].middleCols(c0, n);
+            if (op.act != ActivationKind::identity)
+                multiply_by_derivative(op.act, m_batch_pre[i].middleCols(c0, n).array(), a_dst.array());
+            switch (op.kind) {
+            case Op::Kind::affine:
+                a_src.noalias() += op.W.transpose() * a_dst;
+                if (!op.accumulate) a_dst.setZero();
+                break;
+            case Op::Kind::scale:
+                a_src += op.b.head(op.in).asDiagonal() * a_dst;
+                a_dst.setZero();
+                break;
+            case Op::Kind::act:
+                a_src += a_dst;
+                a_dst.setZero();
+                break;
+            case Op::Kind::add: a_src += a_dst; break;
+            }
         }
     }
     dX.swap(m_batch_adjoint[0]);
