@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/embedding_metrics.hpp"
 #include "eval/metrics.hpp"
 #include "pipeline/experiment.hpp"
 
@@ -35,6 +36,8 @@ struct MethodResult {
     std::vector<std::uint64_t> seeds;
     std::vector<RolloutSummary> per_seed;
     std::vector<TrainingBudget> budgets;  ///< one per fit (per seed)
+    /// Embedding metrics a method measured in its fit (artefact attributes; the first seed's).
+    std::vector<EmbeddingMetrics> embeddings;
 };
 
 struct SceneResult {

@@ -222,6 +222,7 @@ private:
         mr.paper_method = method.is_paper_method();
         mr.rollout_file = m_dir + "/rollouts/" + stem + ".h5";
         mr.budgets.push_back(method.has_artefact() ? read_budget(artefact) : TrainingBudget{});
+        if (method.has_artefact()) mr.embeddings = load_embedding_metrics(h5::File::open(artefact));
         const std::string rkey = fnv1a64_hex(key + "|rollout|" + m_ex.sequences + "|" + std::to_string(m_ex.rollout_frames) +
                                               "|format " + std::to_string(kRolloutFormatVersion));
         mr.rollout_key = rkey;
