@@ -11,7 +11,7 @@
 //   hidden                      MLP widths (default: the scene's integrator widths, paper Table 2)
 //   stage1_epochs, stage2_epochs, stage3_epochs   [0, 10⁷] (100, 300, 50)
 //   batch                       frames / windows per batch [1, 10⁷] (64)
-//   learning_rate               stage 2 (1e-3);  ae_learning_rate  stages 1, 3 (1e-4)
+//   learning_rate               stage 2 (1e-3);  ae_learning_rate  stages 1, 3 (1e-5)
 //   penalty_weight              w_bc > 0 (1e5);  seed ≥ 0;  max_seconds ≥ 0 (per stage, 0: none)
 // Artefact: the fine-tuned autoencoder ("tan_ae." prefix, Autoencoder::save_into), the MLP
 // ("integrator.", LatentMlpModel::save), per stage tan.stage<k>.{ran, loss_before, loss_after,

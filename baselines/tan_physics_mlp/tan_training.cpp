@@ -157,60 +157,47 @@ void log_stage(int stage, const TanStageReport& r)
 
 } // namespace
 
-TanStageReport TanTrainer::stage1()
+TanStageReport TanTrainer::run_stage(int stage, LatentMlpModel* mlp, std::vector<TanSample> samples,
+                                     std::vector<nn::ParameterRef> parameters, int epochs, double learning_rate,
+                                     const std::function<double(const std::vector<TanSample>&)>& loss)
 {
     TanStageReport r;
     r.ran = true;
-    r.loss_before = stage_loss(1, nullptr, r.parts_before);
-    const nn::Fingerprint print = fingerprint(1, nullptr);
-    TanStageLearner learner(m_losses.frame_samples(), autoencoder_parameters(m_ae),
-                            [&](const std::vector<TanSample>& b) { return m_losses.embedding_loss(b, m_options.weights, true); });
-    r.loop = nn::run_training_loop(
-        learner, loop_options(m_options, 1, m_options.stage1_epochs, m_options.ae_learning_rate, checkpoint_for(1)),
-        print);
-    r.loss_after = stage_loss(1, nullptr, r.parts_after);
-    log_stage(1, r);
+    r.loss_before = stage_loss(stage, mlp, r.parts_before);
+    const nn::Fingerprint print = fingerprint(stage, mlp);
+    TanStageLearner learner(std::move(samples), std::move(parameters), loss);
+    r.loop = nn::run_training_loop(learner, loop_options(m_options, stage, epochs, learning_rate, checkpoint_for(stage)),
+                                   print);
+    r.loss_after = stage_loss(stage, mlp, r.parts_after);
+    log_stage(stage, r);
     return r;
+}
+
+TanStageReport TanTrainer::stage1()
+{
+    return run_stage(1, nullptr, m_losses.frame_samples(), autoencoder_parameters(m_ae), m_options.stage1_epochs,
+                     m_options.ae_learning_rate, [&](const std::vector<TanSample>& b) {
+                         return m_losses.embedding_loss(b, m_options.weights, true);
+                     });
 }
 
 TanStageReport TanTrainer::stage2(LatentMlpModel& mlp)
 {
     if (!m_statistics_fitted) fit_mlp_statistics(mlp);
-    TanStageReport r;
-    r.ran = true;
-    r.loss_before = stage_loss(2, &mlp, r.parts_before);
-    const nn::Fingerprint print = fingerprint(2, &mlp);
-    TanStageLearner learner(m_losses.window_samples(m_window), mlp.network.parameters("integrator."),
-                            [&](const std::vector<TanSample>& b) {
-                                return m_losses.mlp_loss(mlp, b, m_window, m_options.weights,
-                                                         m_options.stop_gradient, true);
-                            });
-    r.loop = nn::run_training_loop(
-        learner, loop_options(m_options, 2, m_options.stage2_epochs, m_options.learning_rate, checkpoint_for(2)),
-        print);
-    r.loss_after = stage_loss(2, &mlp, r.parts_after);
-    log_stage(2, r);
-    return r;
+    return run_stage(2, &mlp, m_losses.window_samples(m_window), mlp.network.parameters("integrator."),
+                     m_options.stage2_epochs, m_options.learning_rate, [&](const std::vector<TanSample>& b) {
+                         return m_losses.mlp_loss(mlp, b, m_window, m_options.weights, m_options.stop_gradient, true);
+                     });
 }
 
 TanStageReport TanTrainer::stage3(LatentMlpModel& mlp)
 {
     if (!m_statistics_fitted) fit_mlp_statistics(mlp);
-    TanStageReport r;
-    r.ran = true;
-    r.loss_before = stage_loss(3, &mlp, r.parts_before);
-    const nn::Fingerprint print = fingerprint(3, &mlp);
     std::vector<nn::ParameterRef> params = autoencoder_parameters(m_ae);
     for (auto& p : mlp.network.parameters("integrator.")) params.push_back(p);
-    TanStageLearner learner(m_losses.frame_samples(), std::move(params), [&](const std::vector<TanSample>& b) {
-        return m_losses.joint_loss(mlp, b, m_options.weights, true);
-    });
-    r.loop = nn::run_training_loop(
-        learner, loop_options(m_options, 3, m_options.stage3_epochs, m_options.ae_learning_rate, checkpoint_for(3)),
-        print);
-    r.loss_after = stage_loss(3, &mlp, r.parts_after);
-    log_stage(3, r);
-    return r;
+    return run_stage(3, &mlp, m_losses.frame_samples(), std::move(params), m_options.stage3_epochs,
+                     m_options.ae_learning_rate,
+                     [&](const std::vector<TanSample>& b) { return m_losses.joint_loss(mlp, b, m_options.weights, true); });
 }
 
 } // namespace lb

@@ -102,6 +102,18 @@ LatentMlpModel small_mlp(FultonProblem& p, std::uint64_t seed)
     return mlp;
 }
 
+/// Quiet options with the given widths and epochs per stage (other options at their defaults).
+TanOptions stage_options(std::vector<Index> hidden, int epochs1, int epochs2, int epochs3)
+{
+    TanOptions o;
+    o.progress = false;
+    o.hidden = std::move(hidden);
+    o.stage1_epochs = epochs1;
+    o.stage2_epochs = epochs2;
+    o.stage3_epochs = epochs3;
+    return o;
+}
+
 constexpr double kPenalty = 1e5;
 
 TEST(TanLosses, StoppedMphysGradientIsTheGradientWithTheFirstTwoArgumentsFrozen)
@@ -117,12 +129,9 @@ TEST(TanLosses, StoppedMphysGradientIsTheGradientWithTheFirstTwoArgumentsFrozen)
     // acceleration — do not: Tan's eq. 10 against eq. 9.
     {
         Autoencoder frozen_ae = *p.ae;
-        TanOptions o;
-        o.progress = false;
-        o.hidden = {8};
+        TanOptions o = stage_options({8}, 0, 60, 0);
         o.window = 3;
         o.batch_size = 16;
-        o.stage2_epochs = 60;
         o.weights.mphys = 0.0;
         TanTrainer(*p.model, p.data, frozen_ae, o).stage2(mlp);
     }
@@ -256,14 +265,9 @@ TEST(TanStages, EachStageLowersItsOwnLossOnTheSmallCloth)
 {
     FultonProblem& p = cloth();
     Autoencoder ae = *p.ae;
-    TanOptions o;
-    o.progress = false;
-    o.hidden = {16, 16};
+    TanOptions o = stage_options({16, 16}, 20, 40, 20);
     o.window = 5;
     o.batch_size = 32;
-    o.stage1_epochs = 20;
-    o.stage2_epochs = 40;
-    o.stage3_epochs = 20;
     TanTrainer trainer(*p.model, p.data, ae, o);
     const FrameSet train = training_frames(p.data);
     LatentMlpModel mlp = LatentMlpModel::create(ae.latent_dim(), p.data.sequences[0].bc_params.cols(), o.hidden, 0);
@@ -285,28 +289,14 @@ TEST(TanStages, EachStageLowersItsOwnLossOnTheSmallCloth)
 
 TEST(TanStages, SmallClothRolloutOf1500FramesStaysFinite)
 {
-    set_log_level(LogLevel::Quiet);
-    const Dataset data = testing::simulate_small_scene("cloth", 1500);
-    const SequenceData& seq = data.sequences.front();
+    // The whole small-cloth sequence, its first 300 frames for training (as the scene says).
+    FultonProblem p("cloth", 1500, 300, 300, 32, 50);
+    const SequenceData& seq = p.data.sequences.front();
     ASSERT_EQ(seq.num_frames(), 1500);
-    const PhysicsModel model(data.physics);
-    AutoencoderOptions ao;
-    ao.latent_dim = 4;
-    ao.hidden = {32, 32};
-    ao.epochs = 300;
-    ao.batch_size = 64;
-    ao.learning_rate = 1e-3;
-    ao.progress = false;
-    Autoencoder ae(data.physics, ao, 0);
-    train_autoencoder(ae, data, ao);
-
-    TanOptions o;
-    o.progress = false;
-    o.hidden = {32, 32};
-    o.stage1_epochs = 20;
-    o.stage2_epochs = 60;
-    o.stage3_epochs = 10;
-    TanTrainer trainer(model, data, ae, o);
+    const PhysicsModel& model = *p.model;
+    Autoencoder& ae = *p.ae;
+    const TanOptions o = stage_options({32, 32}, 20, 60, 10);
+    TanTrainer trainer(model, p.data, ae, o);
     LatentMlpModel mlp = LatentMlpModel::create(ae.latent_dim(), seq.bc_params.cols(), o.hidden, 0);
     trainer.stage1();
     trainer.stage2(mlp);
