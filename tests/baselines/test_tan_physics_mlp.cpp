@@ -3,7 +3,9 @@
 // small cloth, and a 1,500-frame rollout.
 #include <gtest/gtest.h>
 
+#include "baselines/builtin_methods.hpp"
 #include "baselines/tan_physics_mlp/tan_training.hpp"
+#include "core/error.hpp"
 #include "eval/rollout.hpp"
 #include "integrators/trainer.hpp"
 #include "support/finite_difference.hpp"
@@ -310,6 +312,19 @@ TEST(TanStages, SmallClothRolloutOf1500FramesStaysFinite)
     std::printf("tan_physics_mlp small cloth: stable horizon %d of %ld frames, first RMSE > 0.1 at %d, test mean "
                 "RMSE %.4g\n",
                 r.summary.stable_horizon, long(seq.num_frames()), r.summary.horizon_loose, r.summary.test.mean_rmse);
+}
+
+TEST(TanMethod, OptionsAreRangeChecked)
+{
+    const MethodRegistry& r = builtin_methods();
+    EXPECT_NO_THROW(r.parse_text("tan_physics_mlp", "stage1 = false\nstage3 = false\n", "test"));
+    for (const char* bad : {"window = 0\n", "window = 1001\n", "lambda_ephys = -0.5\n", "lambda_mphys = nan\n",
+                            "stage2 = false\nstage3 = false\n", "lambda_sim = 0.0\nlambda_mphys = 0.0\n",
+                            "batch = 0\n", "stage2_epochs = -1\n", "learning_rate = 0.0\n",
+                            "ae_learning_rate = -1.0\n", "penalty_weight = 0.0\n", "max_seconds = -1.0\n",
+                            "seed = -1\n", "hidden = [0]\n"}) {
+        EXPECT_THROW(r.parse_text("tan_physics_mlp", bad, "test"), ConfigError) << bad;
+    }
 }
 
 } // namespace
