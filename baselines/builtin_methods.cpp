@@ -2,6 +2,7 @@
 
 #include "baselines/fulton_cubature/fulton_method.hpp"
 #include "baselines/linear_pca/linear_pca_method.hpp"
+#include "baselines/tan_physics_mlp/tan_method.hpp"
 
 namespace lb {
 
@@ -13,6 +14,7 @@ const MethodRegistry& builtin_methods()
         r.add(linear_pca_method());  // one line per method
         r.add(fulton_cubature_method());
         r.add(fulton_full_method());
+        r.add(tan_physics_mlp_method());
         return r;
     }();
     return registry;

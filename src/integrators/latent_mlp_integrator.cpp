@@ -41,10 +41,10 @@ MatrixXd LatentMlpModel::forward(const MatrixXd& inputs_raw, const MatrixXd& z_p
     return z_prev + output_scale.asDiagonal() * out;
 }
 
-void LatentMlpModel::backward(const MatrixXd& dZ)
+MatrixXd LatentMlpModel::backward(const MatrixXd& dZ)
 {
     // z = z_prev + s ⊙ out: ∂L/∂out = s ⊙ ∂L/∂z (z_prev is an input, not a parameter).
-    network.backward(output_scale.asDiagonal() * dZ, true);
+    return inputs.backward(network.backward(output_scale.asDiagonal() * dZ, true));
 }
 
 void LatentMlpModel::save(h5::File& file, const std::string& prefix)

@@ -36,7 +36,9 @@ struct LatentMlpModel {
     /// @param inputs_raw  input_dim × B unstandardised; @param z_prev  latent × B
     MatrixXd forward(const MatrixXd& inputs_raw, const MatrixXd& z_prev, bool training);
     /// Backward of the last forward: dZ (latent × B) → accumulates parameter gradients.
-    void backward(const MatrixXd& dZ);
+    /// Returns ∂L/∂inputs_raw (input_dim × B) through the network and the standardiser; the
+    /// skip connection's term (∂L/∂z_prev += dZ) is the caller's, as z_prev is passed apart.
+    MatrixXd backward(const MatrixXd& dZ);
 
     static LatentMlpModel create(Index latent_dim, Index param_dim, const std::vector<Index>& hidden,
                                  std::uint64_t seed);

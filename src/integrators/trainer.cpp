@@ -230,19 +230,6 @@ double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 
 namespace {
 
-/// Content hash of what defines the physics (mesh, material, dt, gravity, Dirichlet set).
-std::string physics_hash(const PhysicsSpec& p)
-{
-    Fnv1a64 h;
-    h.add(int(p.mesh.kind)).add(MatrixXd(p.mesh.rest_positions)).add(p.mesh.elements);
-    for (const auto& rod : p.mesh.rods) h.add(std::int64_t(rod.size())).add_bytes(rod.data(), rod.size() * sizeof(int));
-    h.add(p.material.youngs_modulus).add(p.material.poisson_ratio).add(p.material.density);
-    h.add(p.material.thickness).add(p.material.radius).add(p.dt);
-    h.add(p.gravity.x()).add(p.gravity.y()).add(p.gravity.z());
-    h.add(std::int64_t(p.bc_indices.size())).add_bytes(p.bc_indices.data(), p.bc_indices.size() * sizeof(int));
-    return h.hex();
-}
-
 std::string samples_hash(const TrainingSamples& s)
 {
     Fnv1a64 h;
@@ -275,10 +262,9 @@ private:
 
 } // namespace
 
-void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& samples)
+void fit_input_statistics(LatentMlpModel& model, const TrainingSamples& samples)
 {
     const Index S = samples.size();
-    // Input standardisation and output scale from the (clean) training samples.
     MatrixXd inputs(model.input_dim(), S);
     inputs << samples.z_prev, samples.z_prev2, samples.p, samples.p_prev, samples.p_prev2;
     model.inputs = nn::Standardizer::fit(inputs);
@@ -289,6 +275,11 @@ void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& sa
         if (!(std[c] > 1e-12)) std[c] = 1.0;
     }
     model.output_scale = std;
+}
+
+void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& samples)
+{
+    fit_input_statistics(model, samples);
     if (m_options.loss == IntegratorLoss::SelfSupervised) {
         m_potential.freeze_decoder();  // the autoencoder does not change while the integrator trains
         cache_decoded_inputs(samples);
@@ -330,7 +321,7 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
         fingerprint.add("options", resolved_options(samples.size()))
             .add("autoencoder", m_autoencoder.content_hash())
             .add("data", samples_hash(samples))
-            .add("physics", physics_hash(m_model.spec()))
+            .add("physics", physics_content_hash(m_model.spec()))
             .add("network", net_hash.hex());
     }
     prepare(model, samples);

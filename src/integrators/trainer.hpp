@@ -65,6 +65,10 @@ struct TrainingSamples {
 };
 TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data);
 
+/// The model's input standardiser (from the samples' inputs) and output scale s (the
+/// per-component standard deviation of z_t − z_{t−1}, 1 where it vanishes).
+void fit_input_statistics(LatentMlpModel& model, const TrainingSamples& samples);
+
 /// A mini-batch, after noise was (optionally) added.
 struct IntegratorBatch {
     std::vector<Index> source;  ///< sample index of each column

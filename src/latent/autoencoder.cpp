@@ -70,21 +70,20 @@ nn::Linear& linear_layer(nn::Sequential& net, Index i, const char* what)
 
 std::string hexfloat(double x) { return nn::exact_text(x); }
 
-long long require_int(const h5::File& f, const std::string& key, long long min, long long max)
+long long require_int(const h5::File& f, const std::string& where, const std::string& key, long long min,
+                      long long max)
 {
-    if (!f.has_attribute("/", key))
-        throw IoError("autoencoder file '" + f.path() + "': missing attribute '" + key + "'");
+    if (!f.has_attribute("/", key)) throw IoError(where + ": missing attribute '" + key + "'");
     const long long v = f.attribute_int("/", key);
     if (v < min || v > max)
-        throw IoError("autoencoder file '" + f.path() + "': attribute '" + key + "' is " + std::to_string(v) +
+        throw IoError(where + ": attribute '" + key + "' is " + std::to_string(v) +
                       ", outside [" + std::to_string(min) + ", " + std::to_string(max) + "]");
     return v;
 }
 
-std::string require_string(const h5::File& f, const std::string& key)
+std::string require_string(const h5::File& f, const std::string& where, const std::string& key)
 {
-    if (!f.has_attribute("/", key))
-        throw IoError("autoencoder file '" + f.path() + "': missing attribute '" + key + "'");
+    if (!f.has_attribute("/", key)) throw IoError(where + ": missing attribute '" + key + "'");
     return f.attribute_string("/", key);
 }
 
@@ -216,37 +215,46 @@ std::string Autoencoder::content_hash()
 
 void Autoencoder::save(const std::string& path)
 {
-    h5::write_file_atomically(path, [&](h5::File& file) {
-        nn::save_network(file, "encoder.", m_encoder);
-        nn::save_network(file, "decoder.", m_decoder);
-        file.set_attribute("/", "format", std::string(kFileFormat));
-        file.set_attribute("/", "latent_dim", (long long)m_options.latent_dim);
-        file.set_attribute("/", "pca_dim", (long long)m_options.pca_dim);
-        file.set_attribute("/", "hidden", join(m_options.hidden));
-        file.set_attribute("/", "batch_norm", (long long)m_options.batch_norm);
-        file.set_attribute("/", "residual", (long long)m_options.residual);
-        file.set_attribute("/", "encoding", std::string(m_encoding.kind_name()));
-        file.set_attribute("/", "num_features", (long long)m_encoding.num_features());
-        file.set_attribute("/", "num_dofs", (long long)m_encoding.num_dofs());
-        file.set_attribute("/", "scene", m_scene_name);
-        file.set_attribute("/", "seed", std::to_string(m_seed));
-    });
+    h5::write_file_atomically(path, [&](h5::File& file) { save_into(file, ""); });
+}
+
+void Autoencoder::save_into(h5::File& file, const std::string& prefix)
+{
+    nn::save_network(file, prefix + "encoder.", m_encoder);
+    nn::save_network(file, prefix + "decoder.", m_decoder);
+    file.set_attribute("/", prefix + "format", std::string(kFileFormat));
+    file.set_attribute("/", prefix + "latent_dim", (long long)m_options.latent_dim);
+    file.set_attribute("/", prefix + "pca_dim", (long long)m_options.pca_dim);
+    file.set_attribute("/", prefix + "hidden", join(m_options.hidden));
+    file.set_attribute("/", prefix + "batch_norm", (long long)m_options.batch_norm);
+    file.set_attribute("/", prefix + "residual", (long long)m_options.residual);
+    file.set_attribute("/", prefix + "encoding", std::string(m_encoding.kind_name()));
+    file.set_attribute("/", prefix + "num_features", (long long)m_encoding.num_features());
+    file.set_attribute("/", prefix + "num_dofs", (long long)m_encoding.num_dofs());
+    file.set_attribute("/", prefix + "scene", m_scene_name);
+    file.set_attribute("/", prefix + "seed", std::to_string(m_seed));
 }
 
 Autoencoder Autoencoder::load(const std::string& path, const PhysicsSpec& physics)
 {
-    const h5::File file = h5::File::open(path);
-    const std::string where = "autoencoder file '" + path + "'";
-    if (!file.has_attribute("/", "format") || file.attribute_string("/", "format") != kFileFormat)
-        throw IoError(where + ": not a latentbench autoencoder (attribute 'format' is not '" + kFileFormat + "')");
+    return load_from(h5::File::open(path), "", physics);
+}
+
+Autoencoder Autoencoder::load_from(const h5::File& file, const std::string& prefix, const PhysicsSpec& physics)
+{
+    const std::string where =
+        "autoencoder file '" + file.path() + "'" + (prefix.empty() ? std::string() : " (prefix '" + prefix + "')");
+    if (!file.has_attribute("/", prefix + "format") || file.attribute_string("/", prefix + "format") != kFileFormat)
+        throw IoError(where + ": not a latentbench autoencoder (attribute '" + prefix + "format' is not '" +
+                      kFileFormat + "')");
 
     AutoencoderOptions options;
-    options.latent_dim = static_cast<Index>(require_int(file, "latent_dim", 1, kMaxWidth));
-    options.pca_dim = static_cast<Index>(require_int(file, "pca_dim", 0, kMaxWidth));
-    options.hidden = parse_widths(require_string(file, "hidden"), where);
-    options.batch_norm = require_int(file, "batch_norm", 0, 1) != 0;
-    options.residual = require_int(file, "residual", 0, 1) != 0;
-    const std::string seed_text = file.has_attribute("/", "seed") ? file.attribute_string("/", "seed") : "0";
+    options.latent_dim = static_cast<Index>(require_int(file, where, prefix + "latent_dim", 1, kMaxWidth));
+    options.pca_dim = static_cast<Index>(require_int(file, where, prefix + "pca_dim", 0, kMaxWidth));
+    options.hidden = parse_widths(require_string(file, where, prefix + "hidden"), where);
+    options.batch_norm = require_int(file, where, prefix + "batch_norm", 0, 1) != 0;
+    options.residual = require_int(file, where, prefix + "residual", 0, 1) != 0;
+    const std::string seed_text = file.has_attribute("/", prefix + "seed") ? file.attribute_string("/", prefix + "seed") : "0";
     const std::uint64_t seed = std::strtoull(seed_text.c_str(), nullptr, 10);
 
     Autoencoder ae = [&] {
@@ -256,8 +264,8 @@ Autoencoder Autoencoder::load(const std::string& path, const PhysicsSpec& physic
             throw IoError(where + ": " + e.what());
         }
     }();
-    const long long F = require_int(file, "num_features", 1, std::numeric_limits<int>::max());
-    const std::string kind = require_string(file, "encoding");
+    const long long F = require_int(file, where, prefix + "num_features", 1, std::numeric_limits<int>::max());
+    const std::string kind = require_string(file, where, prefix + "encoding");
     if (kind != ae.m_encoding.kind_name())
         throw IoError(where + ": made for the '" + kind + "' encoding, but the physics needs '" +
                       ae.m_encoding.kind_name() + "'");
@@ -266,13 +274,13 @@ Autoencoder Autoencoder::load(const std::string& path, const PhysicsSpec& physic
                       std::to_string(ae.num_features()) + " (" + std::to_string(ae.m_encoding.num_dofs()) +
                       " DOF): a different mesh or Dirichlet set");
     ae.m_options.pca_dim = options.pca_dim;  // as saved (already clamped)
-    ae.m_encoder = nn::load_network(file, "encoder.").network;
-    ae.m_decoder = nn::load_network(file, "decoder.").network;
+    ae.m_encoder = nn::load_network(file, prefix + "encoder.").network;
+    ae.m_decoder = nn::load_network(file, prefix + "decoder.").network;
     if (ae.m_encoder.in_features() != F || ae.m_decoder.out_features() != F ||
         ae.m_encoder.out_features() != options.latent_dim || ae.m_decoder.in_features() != options.latent_dim)
         throw IoError(where + ": encoder/decoder shapes do not match latent_dim " +
                       std::to_string(options.latent_dim) + " and " + std::to_string(F) + " features");
-    ae.m_scene_name = file.has_attribute("/", "scene") ? file.attribute_string("/", "scene") : "";
+    ae.m_scene_name = file.has_attribute("/", prefix + "scene") ? file.attribute_string("/", prefix + "scene") : "";
     return ae;
 }
 

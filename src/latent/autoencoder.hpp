@@ -28,6 +28,10 @@
 
 namespace lb {
 
+namespace h5 {
+class File;
+}
+
 struct AutoencoderOptions : nn::TrainingRunOptions {
     // architecture
     Index latent_dim = 4;
@@ -108,6 +112,10 @@ public:
     /// Throws IoError naming the file if it is not an autoencoder file or its feature
     /// count / encoding kind does not match `physics`.
     static Autoencoder load(const std::string& path, const PhysicsSpec& physics);
+    /// The same layout inside an open file, every dataset and attribute name prefixed with
+    /// `prefix` (e.g. "tan_ae."): a method's artefact that carries its own autoencoder.
+    void save_into(h5::File& file, const std::string& prefix);
+    static Autoencoder load_from(const h5::File& file, const std::string& prefix, const PhysicsSpec& physics);
 
 private:
     struct NoNetworks { };

@@ -67,37 +67,67 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
     } else {
         X = m_autoencoder.decode(Z, bc_targets);
     }
-    out.energies.resize(B);
-    MatrixXd grad_x(options.gradient ? n_dofs : 0, options.gradient ? B : 0);
+    energies_of(X, bc_targets, X_prev, X_prev2, options, check_finite, out);
+    if (options.gradient) {
+        if (m_frozen)
+            m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(out.grad_x), out.grad_z);
+        else
+            out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x);
+    }
+    if (options.decoded) out.X = std::move(X);
+    return out;
+}
+
+void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                  const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                                  const LatentEnergyOptions& options, bool check_finite, LatentEnergies& out)
+{
+    const Index B = X.cols();
+    const bool gradient = options.gradient;
+    VectorXd& energies = out.energies;
+    MatrixXd& grad_x = out.grad_x;
+    energies.resize(B);
+    grad_x.resize(gradient ? X.rows() : 0, gradient ? B : 0);
 #pragma omp parallel for schedule(dynamic, 1)
     for (Index i = 0; i < B; ++i) {
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
         const VectorXd x1 = X_prev.col(i), x2 = X_prev2.col(i), xt = X.col(i);
         pot.set_previous(x1, x2);
         pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
-        if (options.gradient) {
+        if (gradient) {
             VectorXd g;
-            out.energies[i] = pot.value_gradient(xt, g);
+            energies[i] = pot.value_gradient(xt, g);
             grad_x.col(i) = g;
         } else {
-            out.energies[i] = pot.value(xt);
+            energies[i] = pot.value(xt);
         }
     }
-    if (check_finite && !out.energies.allFinite())
+    if (check_finite && !energies.allFinite())
         throw NumericalError("non-finite incremental potential in the training batch");
     // The objective's weights w_i / n: divided (not multiplied by 1/n) so the numbers are
     // those of the integrator loss written out before this class existed.
     VectorXd weights = options.weights;
     if (weights.size() == 0) weights.setOnes(B);
-    out.objective = weights.dot(out.energies) / options.normalization;
-    if (options.gradient) {
-        const MatrixXd weighted = grad_x * (weights / options.normalization).asDiagonal();
-        if (m_frozen)
-            m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(weighted), out.grad_z);
-        else
-            out.grad_z = m_autoencoder.decoder_vjp(Z, weighted);
-    }
-    if (options.decoded) out.X = std::move(X);
+    out.objective = weights.dot(energies) / options.normalization;
+    if (gradient) grad_x = grad_x * (weights / options.normalization).asDiagonal();
+}
+
+LatentEnergies LatentPotential::evaluate_positions(const Eigen::Ref<const MatrixXd>& X,
+                                                   const Eigen::Ref<const MatrixXd>& bc_targets,
+                                                   const Eigen::Ref<const MatrixXd>& X_prev,
+                                                   const Eigen::Ref<const MatrixXd>& X_prev2,
+                                                   const LatentEnergyOptions& options)
+{
+    const Index B = X.cols();
+    const Index n_dofs = m_model.num_dofs();
+    const Index n_targets = 3 * Index(m_model.bc_indices().size());
+    if (X.rows() != n_dofs || bc_targets.rows() != n_targets || bc_targets.cols() != B || X_prev.rows() != n_dofs ||
+        X_prev.cols() != B || X_prev2.rows() != n_dofs || X_prev2.cols() != B ||
+        (options.weights.size() != 0 && options.weights.size() != B))
+        throw Error("LatentPotential::evaluate_positions: expected x, x_prev, x_prev2 of " + std::to_string(n_dofs) +
+                    " rows, bc_targets of " + std::to_string(n_targets) + " rows, as many columns and 0 or B weights");
+    LatentEnergies out;
+    energies_of(X, bc_targets, X_prev, X_prev2, options, true, out);
     return out;
 }
 

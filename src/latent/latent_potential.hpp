@@ -41,6 +41,8 @@ struct LatentEnergies {
     double objective = 0.0;  ///< Σ_i w_i E_i / n
     /// ∂objective/∂z_i = (w_i / n) J_D(z_i)ᵀ ∇_x E_i(D(z_i)), latent × B (if options.gradient).
     MatrixXd grad_z;
+    /// (w_i / n) ∇_x E_i(x_i), 3N × B (if options.gradient): what grad_z back-propagates.
+    MatrixXd grad_x;
     MatrixXd X;  ///< D(z_i), 3N × B (if options.decoded)
 };
 
@@ -92,7 +94,20 @@ public:
     /// autoencoder's decode().
     MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
 
+    /// The incremental potentials of B given position vectors (no decoding) and, if
+    /// options.gradient, their weighted x-gradients LatentEnergies::grad_x (grad_z stays
+    /// empty): for losses that back-propagate through a decoder themselves.
+    /// Throws NumericalError if an energy is not finite.
+    /// @param X  3N × B positions x_t; other arguments as evaluate()
+    LatentEnergies evaluate_positions(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                      const Eigen::Ref<const MatrixXd>& X_prev,
+                                      const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options);
+
 private:
+    /// Energies, objective and (if options.gradient) weighted x-gradients of the columns of X.
+    void energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
+                     const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                     const LatentEnergyOptions& options, bool check_finite, LatentEnergies& out);
     /// evaluate(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
     LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
                                     const Eigen::Ref<const MatrixXd>& X_prev,

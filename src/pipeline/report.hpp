@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/embedding_metrics.hpp"
 #include "eval/metrics.hpp"
 #include "pipeline/experiment.hpp"
 
@@ -38,6 +39,8 @@ struct MethodResult {
     /// The sweep point of this row ("training.noise_fraction=0.05, seeds=1"); "" for a
     /// row shared by every point, or without a [sweep].
     std::string point;
+    /// Embedding metrics a method measured in its fit (artefact attributes; the first seed's).
+    std::vector<EmbeddingMetrics> embeddings;
 };
 
 struct SceneResult {

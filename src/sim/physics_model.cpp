@@ -1,6 +1,7 @@
 #include "sim/physics_model.hpp"
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "energy/dirichlet_penalty.hpp"
 #include "energy/gravity_energy.hpp"
 #include "energy/inertia_energy.hpp"
@@ -119,6 +120,18 @@ void IncrementalPotential::set_previous(const VectorXd& x_prev, const VectorXd& 
 void IncrementalPotential::set_bc_targets(const MatrixX3d& targets)
 {
     if (m_penalty) m_penalty->set_targets(targets);
+}
+
+std::string physics_content_hash(const PhysicsSpec& p)
+{
+    Fnv1a64 h;
+    h.add(int(p.mesh.kind)).add(MatrixXd(p.mesh.rest_positions)).add(p.mesh.elements);
+    for (const auto& rod : p.mesh.rods) h.add(std::int64_t(rod.size())).add_bytes(rod.data(), rod.size() * sizeof(int));
+    h.add(p.material.youngs_modulus).add(p.material.poisson_ratio).add(p.material.density);
+    h.add(p.material.thickness).add(p.material.radius).add(p.dt);
+    h.add(p.gravity.x()).add(p.gravity.y()).add(p.gravity.z());
+    h.add(std::int64_t(p.bc_indices.size())).add_bytes(p.bc_indices.data(), p.bc_indices.size() * sizeof(int));
+    return h.hex();
 }
 
 } // namespace lb

@@ -5,6 +5,7 @@
 //   E(x) = 1/(2h²)(x − x̃)ᵀM(x − x̃) + E_elastic(x) − Σ m_i g·x_i [+ w_bc Σ_B |x_i − x*_i|²],
 //   x̃ = 2x_{t−1} − x_{t−2}.
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "energy/energy.hpp"
@@ -75,6 +76,10 @@ private:
 /// @param penalty_weight  the configured w_bc (> 0)
 /// @return the w_bc to build the IncrementalPotential with: 0 for rods, else penalty_weight
 double applied_penalty_weight(const PhysicsModel& model, double penalty_weight);
+
+/// Content hash (FNV-1a/64, hex) of what defines the physics: mesh, material, dt, gravity,
+/// Dirichlet set. Part of the fingerprints of training checkpoints.
+std::string physics_content_hash(const PhysicsSpec& spec);
 
 /// The objective of one implicit-Euler step. Owns its inertia and penalty terms
 /// (cheap), shares the model's elastic terms, so one instance per thread can be
