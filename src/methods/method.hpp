@@ -69,6 +69,10 @@ public:
     /// The resolved options, canonical TOML (parsable by the factory): part of the cache
     /// key of the method's artefact and rollouts, and stored in the artefact.
     virtual std::string options_text() const = 0;
+    /// The version of fit(): bumped when a code change makes fit() produce different
+    /// artefacts from the same options, so that cached artefacts (their stage key includes
+    /// it from version 2 on) are refitted, never reused.
+    virtual int fit_version() const { return 1; }
     /// One phrase for table rows, e.g. "self_supervised, noise on, balancing on".
     virtual std::string summary() const = 0;
     /// Hidden widths of the integrator network for Table 2 ("" if it has none).

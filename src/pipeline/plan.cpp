@@ -50,7 +50,9 @@ std::string autoencoder_stage_key(const std::string& sim_key, const AutoencoderO
 std::string method_stage_key(const Method& method, const std::string& sim_key, const std::string& ae_key)
 {
     const std::string& inputs_key = method.needs_autoencoder() ? ae_key : sim_key;
-    return fnv1a64_hex(inputs_key + "|" + method.method_name() + "|" + method.options_text());
+    const int version = method.fit_version();
+    return fnv1a64_hex(inputs_key + "|" + method.method_name() + "|" + method.options_text() +
+                       (version > 1 ? "|fit v" + std::to_string(version) : std::string()));
 }
 
 std::string rollout_stage_key(const std::string& method_key, const ExperimentConfig& ex)

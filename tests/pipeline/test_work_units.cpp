@@ -9,6 +9,7 @@
 
 #include "baselines/builtin_methods.hpp"
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/log.hpp"
 #include "pipeline/experiment.hpp"
 #include "pipeline/plan.hpp"
@@ -285,6 +286,28 @@ TEST(WorkUnits, MergedUnitsGiveTheLocalRunsTables)
                                       local + "/tables", units + "/tables"});
     EXPECT_EQ(differs.exit_code, 1) << differs.output;
     EXPECT_NE(differs.output.find("'method': 'ours' vs 'OURS'"), std::string::npos) << differs.output;
+}
+
+} // namespace
+} // namespace lb
+
+namespace lb {
+namespace {
+
+/// A method whose fit changed (fit_version() > 1) gets a new stage key, so its cached
+/// artefacts are refitted; version-1 methods keep the key they always had.
+TEST(WorkUnits, FitVersionIsPartOfTheStageKey)
+{
+    const MethodRegistry& registry = builtin_methods();
+    const std::unique_ptr<Method> latent = registry.parse_text("latent_mlp", "", "test");
+    const std::unique_ptr<Method> pca = registry.parse_text("linear_pca", "", "test");
+    latent->resolve({"cloth", 4});
+    pca->resolve({"cloth", 4});
+    ASSERT_GE(latent->fit_version(), 2);
+    EXPECT_NE(method_stage_key(*latent, "sim", "ae"),
+              fnv1a64_hex("ae|" + latent->method_name() + "|" + latent->options_text()));
+    ASSERT_EQ(pca->fit_version(), 1);
+    EXPECT_EQ(method_stage_key(*pca, "sim", "ae"), fnv1a64_hex("sim|" + pca->method_name() + "|" + pca->options_text()));
 }
 
 } // namespace

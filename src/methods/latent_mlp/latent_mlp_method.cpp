@@ -49,6 +49,9 @@ public:
         m_hidden_given = true;
     }
 
+    /// 2 (2026-11-30): every sample every epoch and the compiled frozen decoder
+    /// (integrators/trainer.cpp); version-1 artefacts dropped each epoch's partial batch.
+    int fit_version() const override { return 2; }
     std::string options_text() const override
     {
         const IntegratorTrainOptions& o = m_options;
