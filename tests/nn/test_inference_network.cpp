@@ -127,11 +127,11 @@ TEST(InferenceNetwork, FoldsTheInputStandardizer)
     EXPECT_LT(relative_error(fast.evaluate(x), expected), 1e-12);
 }
 
-TEST(InferenceNetwork, HandlesUnfoldableLayers)
+/// Leading BatchNorm and activation, a BatchNorm after an identity-skip block,
+/// activations not preceded by a Linear, an output activation; with `head`, a final
+/// Linear + BatchNorm (foldable) after the last activation.
+Sequential unfoldable_network(Rng& rng, bool head)
 {
-    // Leading BatchNorm and activation, a BatchNorm after an identity-skip block,
-    // activations not preceded by a Linear, an output activation.
-    Rng rng(83);
     Sequential net;
     net.emplace<BatchNorm1d>(5);
     net.emplace<Activation>(ActivationKind::tanh);
@@ -141,8 +141,17 @@ TEST(InferenceNetwork, HandlesUnfoldableLayers)
     net.emplace<Swish>();
     net.emplace<ResidualBlock>(8, 6, false, ActivationKind::relu, rng);
     net.emplace<Activation>(ActivationKind::tanh);
-    net.emplace<Linear>(6, 4, rng);
-    net.emplace<BatchNorm1d>(4);
+    if (head) {
+        net.emplace<Linear>(6, 4, rng);
+        net.emplace<BatchNorm1d>(4);
+    }
+    return net;
+}
+
+TEST(InferenceNetwork, HandlesUnfoldableLayers)
+{
+    Rng rng(83);
+    Sequential net = unfoldable_network(rng, true);
     test::randomize_batch_norm(net, rng);
     InferenceNetworkD fast_d(net);
     InferenceNetwork fast_f(net);
@@ -194,18 +203,7 @@ TEST(InferenceNetwork, BatchedForwardAndVjpMatchSequential)
     Rng rng(85);
     std::vector<std::pair<std::string, Sequential>> nets;
     for (const auto& arch : table2_architectures()) nets.emplace_back(arch.name, make_mlp(arch.decoder, rng));
-    {
-        Sequential net;
-        net.emplace<BatchNorm1d>(5);
-        net.emplace<Activation>(ActivationKind::tanh);
-        net.emplace<Linear>(5, 8, rng);
-        net.emplace<ResidualBlock>(8, 8, true, ActivationKind::swish, rng);
-        net.emplace<BatchNorm1d>(8);
-        net.emplace<Swish>();
-        net.emplace<ResidualBlock>(8, 6, false, ActivationKind::relu, rng);
-        net.emplace<Activation>(ActivationKind::tanh);
-        nets.emplace_back("unfoldable", std::move(net));
-    }
+    nets.emplace_back("unfoldable", unfoldable_network(rng, false));
     for (auto& [name, net] : nets) {
         test::randomize_batch_norm(net, rng);
         InferenceNetworkD fast_d(net);
