@@ -70,6 +70,18 @@ RodBending::ElementVector RodBending::local_gradient(Index i, const ElementVecto
     return g;
 }
 
+double RodBending::local_value_gradient(Index i, const ElementVector& xe, ElementVector& g) const
+{
+    // local_value and local_gradient sharing one curvature binormal and its Jacobian.
+    Matrix36d J;
+    const Vector3d kb =
+        curvature_binormal(xe.segment<3>(3) - xe.segment<3>(0), xe.segment<3>(6) - xe.segment<3>(3), &J);
+    const double c = m_stiffness / m_rest_lengths[size_t(i)];
+    const Eigen::Matrix<double, 6, 1> gz = 2.0 * c * J.transpose() * kb;
+    g << -gz.head<3>(), gz.head<3>() - gz.tail<3>(), gz.tail<3>();
+    return c * kb.squaredNorm();
+}
+
 RodBending::ElementMatrix RodBending::local_hessian(Index i, const ElementVector& xe) const
 {
     // E = c κbᵀκb over z = (e0, e1) = S x (S linear, see edge_map):

@@ -40,6 +40,7 @@ public:
 protected:
     double local_value(Index i, const ElementVector& xe) const override;
     ElementVector local_gradient(Index i, const ElementVector& xe) const override;
+    double local_value_gradient(Index i, const ElementVector& xe, ElementVector& g) const override;
     ElementMatrix local_hessian(Index i, const ElementVector& xe) const override;
 
 private:
