@@ -14,6 +14,7 @@ LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoenc
     const int threads = std::max(1, omp_get_max_threads());
     m_potentials.reserve(size_t(threads));
     for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
+    m_gradients.resize(size_t(threads));
 }
 
 double LatentPotential::value(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
@@ -95,7 +96,7 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
         pot.set_previous(x1, x2);
         pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
         if (gradient) {
-            VectorXd g;
+            VectorXd& g = m_gradients[size_t(omp_get_thread_num())];  // reused: no allocation per sample
             energies[i] = pot.value_gradient(xt, g);
             grad_x.col(i) = g;
         } else {

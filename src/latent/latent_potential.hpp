@@ -118,6 +118,7 @@ private:
     Autoencoder& m_autoencoder;
     double m_penalty_weight = 0.0;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
+    std::vector<VectorXd> m_gradients;               ///< one x-gradient workspace per thread
     std::unique_ptr<nn::InferenceNetworkD> m_frozen;  ///< freeze_decoder()'s compiled decoder
     MatrixXd m_features;                              ///< its output workspace
 };

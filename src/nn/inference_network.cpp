@@ -470,6 +470,17 @@ void BasicInferenceNetwork<S>::gemv_only()
 }
 
 template <typename S>
+bool BasicInferenceNetwork<S>::output_is_plain_affine() const
+{
+    const Op& last = m_ops.back();
+    if (last.kind != Op::Kind::affine || last.accumulate || last.act != ActivationKind::identity || last.dst != m_output)
+        return false;
+    for (std::size_t i = 0; i + 1 < m_ops.size(); ++i)
+        if (m_ops[i].dst == m_output) return false;
+    return true;
+}
+
+template <typename S>
 void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, const std::vector<Index>& rows,
                                              Eigen::Ref<Matrix> J, JacobianMode mode)
 {
@@ -483,10 +494,7 @@ void BasicInferenceNetwork<S>::jacobian_rows(const Eigen::Ref<const Vector>& x, 
     // If the output is produced by a single plain affine op (the PCA layer), skip its
     // primal and use W(rows, :) directly.
     const Op& last = m_ops.back();
-    bool special = last.kind == Op::Kind::affine && !last.accumulate && last.act == ActivationKind::identity &&
-                   last.dst == m_output;
-    for (std::size_t i = 0; special && i + 1 < m_ops.size(); ++i)
-        if (m_ops[i].dst == m_output) special = false;
+    const bool special = output_is_plain_affine();
     const std::size_t end = special ? m_ops.size() - 1 : m_ops.size();
 
     // Primal pass with the tape (ops before `end` only).
@@ -645,10 +653,7 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
     // The output layer (the PCA layer) reads dY directly when it alone writes the output.
     std::size_t end = m_ops.size();
     const Op& last = m_ops.back();
-    bool direct = last.kind == Op::Kind::affine && !last.accumulate && last.act == ActivationKind::identity &&
-                  last.dst == m_output;
-    for (std::size_t i = 0; direct && i + 1 < m_ops.size(); ++i)
-        if (m_ops[i].dst == m_output) direct = false;
+    const bool direct = output_is_plain_affine();
     if (direct) --end;
     const int blocks = column_blocks(B);
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)

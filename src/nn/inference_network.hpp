@@ -113,6 +113,9 @@ private:
     /// Ops [0, end); with the tape, pre-activations are kept for the derivatives.
     void run(bool record_tape, std::size_t end);
     void affine(const Op& op);
+    /// True if the output is written by the last op alone, a plain affine one (the PCA
+    /// layer): the derivatives then use its weights directly.
+    bool output_is_plain_affine() const;
 
     Index m_in = 0, m_out = 0;
     std::vector<Op> m_ops;
