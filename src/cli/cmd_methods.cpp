@@ -55,8 +55,10 @@ std::string options_from_pairs(const std::vector<std::string>& pairs)
 }
 
 /// The inputs a method gets from the command line for a dataset.
+/// `loaded`: the autoencoder of `ae_path` if the caller has it already (not read again).
 MethodInputs command_line_inputs(const Dataset& data, const PhysicsModel& model, const Method& method,
-                                 const std::string& ae_path, const std::string& what)
+                                 const std::string& ae_path, const std::string& what,
+                                 std::shared_ptr<Autoencoder> loaded = nullptr)
 {
     MethodInputs in;
     in.data = &data;
@@ -65,7 +67,7 @@ MethodInputs command_line_inputs(const Dataset& data, const PhysicsModel& model,
     if (method.needs_autoencoder()) {
         if (ae_path.empty())
             throw ConfigError(what + ": --ae is required for method '" + method.method_name() + "'");
-        in.autoencoder = std::make_shared<Autoencoder>(Autoencoder::load(ae_path, data.physics));
+        in.autoencoder = loaded ? std::move(loaded) : std::make_shared<Autoencoder>(Autoencoder::load(ae_path, data.physics));
     }
     // The reference simulator uses the scene's own Newton settings, stored in the dataset.
     if (!method.has_artefact()) in.newton = load_scene_from_string(data.scene_toml, "dataset scene", ".").newton;
@@ -232,8 +234,7 @@ void register_diagnose(CLI::App& app)
         for (const std::string& path : a->integrators) {
             const h5::File artefact = h5::File::open(path);
             std::unique_ptr<Method> method = method_from_artefact(registry, artefact);
-            MethodInputs in = command_line_inputs(data, model, *method, a->ae, "diagnose");
-            if (method->needs_autoencoder()) in.autoencoder = autoencoder;
+            const MethodInputs in = command_line_inputs(data, model, *method, a->ae, "diagnose", autoencoder);
             method->resolve({data.scene_name, scene_latent(in, data)});
             const std::string label = std::filesystem::path(path).stem().string();
             const std::unique_ptr<Integrator> integrator = method->load(in, &artefact, label);
