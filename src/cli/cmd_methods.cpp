@@ -239,8 +239,7 @@ void register_diagnose(CLI::App& app)
             const std::string label = std::filesystem::path(path).stem().string();
             const std::unique_ptr<Integrator> integrator = method->load(in, &artefact, label);
             log_info("diagnose: one step from the truth with %s (%s)", label.c_str(), method->method_name().c_str());
-            diagnosis.add_one_step(*integrator, method->method_name() == "fulton_full" ? "(c) manifold-optimal step"
-                                                                                     : "(d) one step");
+            diagnosis.add_one_step(*integrator, one_step_stage(method->method_name()));
         }
         for (const std::string& path : a->rollouts) {
             std::vector<RolloutRecord> records = load_rollout_summaries(path);

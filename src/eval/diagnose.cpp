@@ -57,6 +57,13 @@ TableCell number(double v)
 
 } // namespace
 
+bool gives_manifold_optimal_step(const std::string& method_name) { return method_name == "fulton_full"; }
+
+std::string one_step_stage(const std::string& method_name)
+{
+    return gives_manifold_optimal_step(method_name) ? "(c) manifold-optimal step" : "(d) one step";
+}
+
 Diagnosis::Diagnosis(const PhysicsModel& model, const Dataset& data, DiagnoseOptions options)
     : m_model(model), m_data(data), m_options(std::move(options))
 {

@@ -62,6 +62,12 @@ struct DiagnoseOptions {
     int stride = 1;                 ///< every stride-th frame t ≥ 2
 };
 
+/// Whether a method's one step from the encoded truth is the manifold-optimal step (c):
+/// `fulton_full` minimises the exact step potential over z.
+bool gives_manifold_optimal_step(const std::string& method_name);
+/// The stage a method's one-step row fills: "(c) manifold-optimal step" or "(d) one step".
+std::string one_step_stage(const std::string& method_name);
+
 class Diagnosis {
 public:
     Diagnosis(const PhysicsModel& model, const Dataset& data, DiagnoseOptions options);

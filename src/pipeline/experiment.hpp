@@ -78,6 +78,11 @@ struct ExperimentConfig {
     bool videos = false;
     /// Longest video in frames (30 fps): longer sequences are subsampled.
     int video_frames = 450;
+    /// `latentbench diagnose` per scene (tables/diagnose_<scene>.*): the error decomposition
+    /// of every latent method's first seed on the evaluated sequences, every
+    /// `diagnose_stride`-th frame.
+    bool diagnose = false;
+    int diagnose_stride = 10;
     std::vector<AblationSpec> ablations;
     /// `[sweep]`: the axes, in key order; their cartesian product is `points`. Empty: no sweep.
     std::vector<SweepAxis> sweep;

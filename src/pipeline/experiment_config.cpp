@@ -127,7 +127,7 @@ AblationSpec read_ablation(ConfigTable a, const std::set<std::string>& names)
 
 const std::vector<std::string>& experiment_stages()
 {
-    static const std::vector<std::string> stages{"simulate", "autoencoder", "integrators", "rollouts", "tables", "plots", "videos"};
+    static const std::vector<std::string> stages{"simulate", "autoencoder", "integrators", "rollouts", "tables", "plots", "videos", "diagnose"};
     return stages;
 }
 
@@ -183,6 +183,8 @@ ExperimentConfig parse_experiment(const toml::table& root, const std::string& pa
         ex.paper_tables = t->get_bool("paper_tables", ex.paper_tables);
         ex.videos = t->get_bool("videos", ex.videos);
         ex.video_frames = t->get_count("video_frames", ex.video_frames, 2, 100000);
+        ex.diagnose = t->get_bool("diagnose", ex.diagnose);
+        ex.diagnose_stride = t->get_count("diagnose_stride", ex.diagnose_stride, 1, 1000000);
         t->finish();
     }
     for (ConfigTable a : cfg.table_array("ablations")) ex.ablations.push_back(read_ablation(a, names));

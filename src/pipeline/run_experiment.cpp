@@ -12,6 +12,7 @@
 #include "core/parse.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "eval/diagnose.hpp"
 #include "eval/rollout.hpp"
 #include "io/atomic_file.hpp"
 #include "io/hdf5.hpp"
@@ -154,6 +155,53 @@ public:
         return r;
     }
 
+    /// The error decomposition of scene `s` (README "Error decomposition") as a cached
+    /// stage: the autoencoder's rows, then per table row (first seed) its one step from
+    /// the truth (fulton_full: the manifold-optimal step) and its rollout. The key covers
+    /// the dataset, the autoencoder, every rollout (and so every artefact) and the stride.
+    std::vector<std::string> diagnose_scene(size_t s, const std::string& tables_dir)
+    {
+        const Unit& su = *m_plan.find(m_plan.scene_units[s]);
+        std::vector<const PlannedRow*> rows;
+        std::string key = "diagnose|" + std::to_string(m_ex.diagnose_stride) + "|" + su.outputs[0].key + "|" +
+                          su.outputs[1].key;
+        for (const PlannedRow& row : m_plan.rows) {
+            if (row.scene_index != s) continue;
+            rows.push_back(&row);
+            key += "|" + row.name + "=" + m_plan.find(row.eval_units.front())->outputs[0].key;
+        }
+        // the manifold-optimal steps (fulton_full) first: they bound the one steps below them
+        std::stable_partition(rows.begin(), rows.end(), [&](const PlannedRow* row) {
+            const Unit& u = *m_plan.find(row->eval_units.front());
+            return !u.full_space && gives_manifold_optimal_step(
+                                        m_points[u.point_index]->scenes[u.scene_index].methods[u.method_index].method->method_name());
+        });
+        const std::string stem = tables_dir + "/diagnose_" + su.scene;
+        m_cache.run("diagnose", su.scene + ": error decomposition", stem + ".md", fnv1a64_hex(key), [&] {
+            LoadedScene& ls = loaded(su.id);
+            DiagnoseOptions options;
+            options.sequences = select_sequences(ls.data, m_points[su.point_index]->sequences);
+            options.stride = m_ex.diagnose_stride;
+            Diagnosis diagnosis(*ls.model, ls.data, options);
+            diagnosis.add_autoencoder(*ls.ae);
+            for (const PlannedRow* row : rows) {
+                const Unit& u = *m_plan.find(row->eval_units.front());
+                if (u.full_space) continue;  // the simulator that made the truth
+                const std::string label = row->point_text.empty() ? row->name : row->name + " [" + row->point_text + "]";
+                Method& method = method_of(u, ls);
+                const MethodInputs in = inputs_of(u, ls, method);
+                const std::unique_ptr<Integrator> integrator = load_integrator(u, method, in, label);
+                log_info("%s: diagnose: one step from the truth with %s", su.scene.c_str(), label.c_str());
+                diagnosis.add_one_step(*integrator, one_step_stage(method.method_name()));
+                std::vector<RolloutRecord> records = load_rollout_summaries(u.outputs[0].file);
+                for (RolloutRecord& r : records) r.method = label;
+                diagnosis.add_rollout(records);
+            }
+            write_table_files(diagnosis.table(ls.data.scene_name), stem);
+        });
+        return {stem + ".md"};
+    }
+
 private:
     void run_scene(const Unit& u)
     {
@@ -258,13 +306,7 @@ private:
         }
         const std::string& file = u.outputs[0].file;
         m_cache.run("rollouts", u.scene + ": rollout '" + u.stem + "'", file, u.outputs[0].key, [&] {
-            std::unique_ptr<Integrator> integrator;
-            if (!u.fit_unit.empty()) {
-                const h5::File f = h5::File::open(m_plan.find(u.fit_unit)->outputs[0].file);
-                integrator = method.load(in, &f, u.stem);
-            } else {
-                integrator = method.load(in, nullptr, u.stem);
-            }
+            const std::unique_ptr<Integrator> integrator = load_integrator(u, method, in, u.stem);
             RolloutOptions ro;
             ro.max_frames = point.rollout_frames;
             std::vector<RolloutResult> rolls;
@@ -273,6 +315,16 @@ private:
             const std::string line = method.after_rollout(*integrator);
             if (!line.empty()) log_info("%s: %s: %s", u.scene.c_str(), u.method.c_str(), line.c_str());
         });
+    }
+
+    /// An eval unit's integrator: its method loaded from the fit unit's artefact, or
+    /// built directly if it has nothing to fit.
+    std::unique_ptr<Integrator> load_integrator(const Unit& u, Method& method, const MethodInputs& in,
+                                                const std::string& label) const
+    {
+        if (u.fit_unit.empty()) return method.load(in, nullptr, label);
+        const h5::File f = h5::File::open(m_plan.find(u.fit_unit)->outputs[0].file);
+        return method.load(in, &f, label);
     }
 
     /// A table row from its eval units' files: one summary per sequence and seed, and
@@ -352,6 +404,11 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
 
     result.tables = write_tables(ex, scenes, result.run_dir + "/tables");
     log_info("[tables] %zu tables in %s/tables", result.tables.size(), result.run_dir.c_str());
+    if (ex.diagnose) {
+        for (size_t s = 0; s < ex.scenes.size(); ++s) {
+            for (const std::string& p : runner.diagnose_scene(s, result.run_dir + "/tables")) result.tables.push_back(p);
+        }
+    }
     if (ex.plots) {
         PlotOptions po;
         po.figures_dir = result.run_dir + "/figures";

@@ -1,9 +1,11 @@
 #include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
@@ -194,6 +196,56 @@ TEST(Experiment, VideosSwitchWritesOneMp4PerSceneAndCachesIt)
 }
 
 std::string read_all(const std::string& path);
+
+// The error decomposition in a suite (issue 14): `[outputs] diagnose = true` writes
+// tables/diagnose_<scene>.{md,csv,tex} with the autoencoder's rows, fulton_full as the
+// manifold-optimal step, every other latent method's one step and rollout (the full-space
+// reference left out); cached like a stage; bad strides refused.
+TEST(Experiment, DiagnoseSwitchWritesTheErrorDecompositionPerScene)
+{
+    set_log_level(LogLevel::Quiet);
+    std::string text = kTiny;
+    text.replace(text.find("plots = false"), 13, "plots = false\ndiagnose = true\ndiagnose_stride = 25");
+    text.replace(text.find("[[scenes]]"), 10, "[[integrators]]\nname = \"oracle\"\nmethod = \"fulton_full\"\n[[scenes]]");
+    const std::string path = write_experiment("diagnose", text);
+    const ExperimentConfig ex = load_experiment(path, builtin_methods());
+    EXPECT_TRUE(ex.diagnose);
+    EXPECT_EQ(ex.diagnose_stride, 25);
+    EXPECT_FALSE(load_experiment(write_experiment("diagnose_default", kTiny), builtin_methods()).diagnose);
+    RunOptions options;
+    options.output_dir = fs::path(path).parent_path().string() + "/run";
+    const RunResult first = run_experiment(ex, options);
+    const std::string table = options.output_dir + "/tables/diagnose_cantilever_small";
+    for (const char* ext : {".md", ".csv", ".tex"}) EXPECT_TRUE(fs::exists(table + ext)) << ext;
+    EXPECT_NE(std::find(first.tables.begin(), first.tables.end(), table + ".md"), first.tables.end());
+    const std::string md = read_all(table + ".md");
+    // one Markdown row with this stage and this method (columns are padded)
+    auto has_row = [&](const std::string& stage, const std::string& method) {
+        std::istringstream lines(md);
+        for (std::string line; std::getline(lines, line);) {
+            if (line.rfind("| " + stage, 0) == 0 && line.find("| " + method + " ") != std::string::npos) return true;
+        }
+        return false;
+    };
+    EXPECT_TRUE(has_row("(a, b) projection", "—")) << md;
+    EXPECT_TRUE(has_row("(c) manifold-optimal step", "oracle")) << md;
+    for (const char* m : {"ours", "sup", "pca"}) EXPECT_TRUE(has_row("(d) one step", m)) << m << "\n" << md;
+    for (const char* m : {"ours", "oracle"}) EXPECT_TRUE(has_row("(e) rollout", m)) << m << "\n" << md;
+    // the manifold-optimal step comes before the one steps it bounds
+    EXPECT_LT(md.find("(c) manifold-optimal step"), md.find("(d) one step")) << md;
+    EXPECT_EQ(md.find("full_space"), std::string::npos) << md;
+
+    EXPECT_EQ(run_experiment(ex, options).stages_run, 0);
+    options.force = {"diagnose"};
+    EXPECT_EQ(run_experiment(ex, options).stages_run, 1);
+
+    for (const char* bad : {"diagnose_stride = 0", "diagnose = 1"}) {
+        std::string t = kTiny;
+        t.replace(t.find("plots = false"), 13, std::string("plots = false\n") + bad);
+        EXPECT_THROW(load_experiment(write_experiment("bad_diagnose", t), builtin_methods()), ConfigError) << bad;
+    }
+}
+
 
 // Seeds (issue 10): every learned method is fitted and rolled out once per seed, methods
 // without a seed once; the tables give statistics over the seeds.
