@@ -9,6 +9,11 @@ namespace lb {
 PcaSplitDecoder::PcaSplitDecoder(Autoencoder& autoencoder, const PhysicsModel& model)
     : m_latent_dim(autoencoder.latent_dim()), m_encoding(model.spec())
 {
+    if (autoencoder.encoding().frame() != EncodingFrame::translation)
+        throw ConfigError(std::string("fulton: the autoencoder encodes in the boundary's rigid frame (") +
+                          autoencoder.encoding().kind_name() +
+                          "); the split decoder's precomputed PCA coordinates assume the translation frame "
+                          "(x = U s + c(targets)); train the autoencoder with frame = \"translation\"");
     nn::Sequential& decoder = autoencoder.decoder();
     if (decoder.size() < 2) throw Error("fulton: the decoder has fewer than two layers; nothing to split");
     const auto* last = dynamic_cast<const nn::Linear*>(&decoder.layer(decoder.size() - 1));

@@ -122,7 +122,7 @@ double TanLosses::embedding_loss(const std::vector<TanSample>& batch, const TanW
     const double loss = position_losses(X_hat, batch, w, gradient, grad_x, parts);
     if (gradient) {
         MatrixXd dF = MatrixXd::Zero(m_ae.num_features(), 3 * B);
-        dF.leftCols(B) = m_ae.encoding().gradient_to_features(grad_x);
+        dF.leftCols(B) = m_ae.encoding().gradient_to_features(grad_x, T.leftCols(B));
         // The x̂_{m−1}, x̂_{m−2} columns get no gradient: stopped.
         m_ae.encoder().backward(m_ae.decoder().backward(dF, true), true);
     }
@@ -194,8 +194,8 @@ double TanLosses::mlp_loss(LatentMlpModel& mlp, const std::vector<TanSample>& ba
         if (!stop_gradient) {
             for (Index j = 2; j < K + 2; ++j) {
                 const size_t u = size_t(j);
-                if (j - 1 >= 2) dZ[u - 1] += m_ae.decoder_vjp(Z[u - 1], grad_prev[u]);
-                if (j - 2 >= 2) dZ[u - 2] += m_ae.decoder_vjp(Z[u - 2], grad_prev2[u]);
+                if (j - 1 >= 2) dZ[u - 1] += m_ae.decoder_vjp(Z[u - 1], grad_prev[u], gather(batch, j - 1, kTargets));
+                if (j - 2 >= 2) dZ[u - 2] += m_ae.decoder_vjp(Z[u - 2], grad_prev2[u], gather(batch, j - 2, kTargets));
             }
         }
         // Back-propagation through time; each step's forward is re-run to restore the
@@ -232,7 +232,7 @@ double TanLosses::joint_loss(LatentMlpModel& mlp, const std::vector<TanSample>& 
     const double loss = position_losses(X_hat, batch, w, gradient, grad_x, parts) + w.sim * parts.sim;
     if (gradient) {
         MatrixXd dF = MatrixXd::Zero(m_ae.num_features(), 3 * B);
-        dF.leftCols(B) = m_ae.encoding().gradient_to_features(grad_x);
+        dF.leftCols(B) = m_ae.encoding().gradient_to_features(grad_x, T.leftCols(B));
         const MatrixXd d_zp = m_ae.decoder().backward(dF, true).leftCols(B);
         const MatrixXd d_sim = (2.0 * w.sim / double(B)) * sim_diff;
         const MatrixXd d_mlp = 0.5 * d_zp + d_sim;

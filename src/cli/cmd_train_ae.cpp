@@ -27,6 +27,7 @@ void register_train_ae(CLI::App& app)
         int checkpoint_every = AutoencoderOptions{}.checkpoint_every;
         int patience = AutoencoderOptions{}.patience;
         double validation = AutoencoderOptions{}.validation_fraction;
+        std::string frame = "translation";
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("train-ae", "Train the BC-relative, PCA-initialised autoencoder on a dataset");
@@ -55,6 +56,11 @@ void register_train_ae(CLI::App& app)
         ->check(CLI::Range(0, kMaxEpochs));
     cmd->add_option("--validation", args->validation,
                     "Fraction of training frames held out for validation (every k-th frame)")->capture_default_str();
+    cmd->add_option("--frame", args->frame,
+                    "Features' frame: translation (relative to the Dirichlet mean or rod roots, the paper's) or "
+                    "rigid (the boundary's best-fit rotation removed as well)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"translation", "rigid"}));
     cmd->callback([args] {
         check_output_path(args->output, "-o");
         if (!args->checkpoint.empty()) check_output_path(args->checkpoint, "--checkpoint");
@@ -71,6 +77,7 @@ void register_train_ae(CLI::App& app)
         options.checkpoint_every = args->checkpoint_every;
         options.patience = args->patience;
         options.validation_fraction = args->validation;
+        options.frame = parse_encoding_frame(args->frame);
         options.progress = log_level() >= LogLevel::Info;
 
         Autoencoder ae(data.physics, options, options.seed);

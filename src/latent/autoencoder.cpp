@@ -101,7 +101,7 @@ std::vector<Index> parse_widths(const std::string& text, const std::string& wher
 
 Autoencoder::Autoencoder(const PhysicsSpec& physics, const AutoencoderOptions& options, std::uint64_t seed,
                          NoNetworks)
-    : m_options(options), m_encoding(physics), m_seed(seed),
+    : m_options(options), m_encoding(physics, options.frame), m_seed(seed),
       m_length_scale(physics.mesh.bounding_box_diagonal())
 {
     validate_architecture(m_options);
@@ -188,9 +188,9 @@ MatrixXd Autoencoder::decode(const MatrixXd& Z, const MatrixXd& bc_targets)
     return m_encoding.to_positions(decode_features(Z), bc_targets);
 }
 
-MatrixXd Autoencoder::decoder_vjp(const MatrixXd& Z, const MatrixXd& grad_x)
+MatrixXd Autoencoder::decoder_vjp(const MatrixXd& Z, const MatrixXd& grad_x, const MatrixXd& bc_targets)
 {
-    return nn::vjp_batch(m_decoder, Z, m_encoding.gradient_to_features(grad_x));
+    return nn::vjp_batch(m_decoder, Z, m_encoding.gradient_to_features(grad_x, bc_targets));
 }
 
 double Autoencoder::relative_rmse(const MatrixXd& X, const MatrixXd& bc_targets)
@@ -256,6 +256,10 @@ Autoencoder Autoencoder::load_from(const h5::File& file, const std::string& pref
     options.residual = require_int(file, where, prefix + "residual", 0, 1) != 0;
     const std::string seed_text = file.has_attribute("/", prefix + "seed") ? file.attribute_string("/", prefix + "seed") : "0";
     const std::uint64_t seed = std::strtoull(seed_text.c_str(), nullptr, 10);
+    const std::string kind = require_string(file, where, prefix + "encoding");
+    const std::string rigid_suffix = "_rigid";
+    if (kind.size() > rigid_suffix.size() && kind.compare(kind.size() - rigid_suffix.size(), rigid_suffix.size(), rigid_suffix) == 0)
+        options.frame = EncodingFrame::rigid;
 
     Autoencoder ae = [&] {
         try {
@@ -265,7 +269,6 @@ Autoencoder Autoencoder::load_from(const h5::File& file, const std::string& pref
         }
     }();
     const long long F = require_int(file, where, prefix + "num_features", 1, std::numeric_limits<int>::max());
-    const std::string kind = require_string(file, where, prefix + "encoding");
     if (kind != ae.m_encoding.kind_name())
         throw IoError(where + ": made for the '" + kind + "' encoding, but the physics needs '" +
                       ae.m_encoding.kind_name() + "'");

@@ -39,6 +39,9 @@ struct AutoencoderOptions : nn::TrainingRunOptions {
     Index pca_dim = 50;                        ///< clamped to the number of training frames and features
     bool batch_norm = true;
     bool residual = true;
+    /// The features' frame (bc_encoding.hpp): the paper's translation-only one, or the
+    /// boundary's rigid frame (rotation removed as well).
+    EncodingFrame frame = EncodingFrame::translation;
     // training (Adam, lr 1e-4, batch 500 in the paper)
     int epochs = 2000;
     int batch_size = 500;
@@ -95,8 +98,9 @@ public:
     MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
     /// Per column s: J_D(z_s)ᵀ ∂L/∂x_s, the gradient w.r.t. the latent of a loss of the
     /// decoded positions (one vector-Jacobian product through the frozen decoder).
-    /// @param Z  latent × S, @param grad_x  3N × S  @return latent × S
-    MatrixXd decoder_vjp(const MatrixXd& Z, const MatrixXd& grad_x);
+    /// @param Z  latent × S, @param grad_x  3N × S, @param bc_targets  3B × S (the
+    /// targets the positions were decoded with) @return latent × S
+    MatrixXd decoder_vjp(const MatrixXd& Z, const MatrixXd& grad_x, const MatrixXd& bc_targets);
     /// decode(encode(X)) in eval mode, compared with X: RMS over vertices and frames of
     /// |x̂_i − x_i| (Euclidean per vertex), divided by length_scale().
     /// @param X  3N × S  @param bc_targets  3B × S

@@ -3,12 +3,27 @@
 
 #include <string>
 
+#include <Eigen/SVD>
+
 #include "core/error.hpp"
 
 namespace lb {
 
-BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics)
+const char* encoding_frame_name(EncodingFrame frame)
+{
+    return frame == EncodingFrame::rigid ? "rigid" : "translation";
+}
+
+EncodingFrame parse_encoding_frame(const std::string& text)
+{
+    if (text == "translation") return EncodingFrame::translation;
+    if (text == "rigid") return EncodingFrame::rigid;
+    throw ConfigError("unknown encoding frame '" + text + "' (expected 'translation' or 'rigid')");
+}
+
+BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics, EncodingFrame frame)
     : m_rod_relative(physics.mesh.kind == MeshKind::Rods),
+      m_frame(frame),
       m_num_dofs(3 * physics.mesh.num_vertices()),
       m_bc_indices(physics.bc_indices)
 {
@@ -22,6 +37,18 @@ BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics)
             throw ConfigError("BC-relative encoding: Dirichlet vertex " + std::to_string(v) + " outside the mesh (" +
                               std::to_string(N) + " vertices)");
         bc_slot[static_cast<std::size_t>(v)] = static_cast<int>(b);
+    }
+    if (m_frame == EncodingFrame::rigid) {
+        const Index B = Index(m_bc_indices.size());
+        m_rest_offsets.resize(3, B);
+        for (Index b = 0; b < B; ++b) m_rest_offsets.col(b) = physics.mesh.rest_positions.row(m_bc_indices[size_t(b)]).transpose();
+        m_rest_offsets.colwise() -= m_rest_offsets.rowwise().mean();
+        // The rotation is fixed only if the set spans at least a plane.
+        const Vector3d s = Eigen::JacobiSVD<Matrix3d>(m_rest_offsets * m_rest_offsets.transpose()).singularValues();
+        if (!(s[1] > 1e-12 * s[0]) || B < 3)
+            throw ConfigError("BC-relative encoding: the rigid frame needs a Dirichlet set that fixes a rotation (at "
+                              "least three non-collinear vertices); this one has " + std::to_string(B) +
+                              (B < 3 ? " vertices" : " collinear vertices") + " (use frame = \"translation\")");
     }
 
     if (!m_rod_relative) {
@@ -62,11 +89,38 @@ BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics)
     m_num_features = 3 * static_cast<Index>(m_rod_vertices.size());
 }
 
+const char* BcRelativeEncoding::kind_name() const
+{
+    if (m_frame == EncodingFrame::rigid) return m_rod_relative ? "rod_root_rigid" : "dirichlet_rigid";
+    return m_rod_relative ? "rod_root" : "dirichlet_mean";
+}
+
 Vector3d BcRelativeEncoding::bc_mean(const Eigen::Ref<const VectorXd>& x) const
 {
     Vector3d mean = Vector3d::Zero();
     for (int v : m_bc_indices) mean += x.segment<3>(3 * Index(v));
     return mean / double(m_bc_indices.size());
+}
+
+VectorXd BcRelativeEncoding::bc_positions_of(const Eigen::Ref<const VectorXd>& x) const
+{
+    VectorXd p(3 * Index(m_bc_indices.size()));
+    for (std::size_t b = 0; b < m_bc_indices.size(); ++b) p.segment<3>(3 * Index(b)) = x.segment<3>(3 * Index(m_bc_indices[b]));
+    return p;
+}
+
+Matrix3d BcRelativeEncoding::frame_rotation(const double* p) const
+{
+    if (m_frame == EncodingFrame::translation) return Matrix3d::Identity();
+    // Kabsch: R minimises Σ_b |R (p⁰_b − c⁰) − (p_b − c)|² over rotations.
+    // H = Σ_b (p⁰_b − c⁰)(p_b − c)ᵀ = Σ_b (p⁰_b − c⁰) p_bᵀ (the rest offsets sum to zero);
+    // a loop, so the inference path allocates nothing.
+    Matrix3d H = Matrix3d::Zero();
+    for (Index b = 0; b < m_rest_offsets.cols(); ++b) H.noalias() += m_rest_offsets.col(b) * Eigen::Map<const Vector3d>(p + 3 * b).transpose();
+    const Eigen::JacobiSVD<Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Matrix3d D = Matrix3d::Identity();
+    if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) D(2, 2) = -1.0;
+    return svd.matrixV() * D * svd.matrixU().transpose();
 }
 
 MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const
@@ -77,16 +131,17 @@ MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const
     const Index S = X.cols();
     MatrixXd F(m_num_features, S);
     for (Index s = 0; s < S; ++s) {
+        const Matrix3d Rt = frame_rotation(bc_positions_of(X.col(s)).data()).transpose();
         if (m_rod_relative) {
             for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
                 const auto [v, slot] = m_rod_vertices[k];
                 const int root = m_bc_indices[static_cast<std::size_t>(slot)];
-                F.col(s).segment<3>(3 * Index(k)) = X.col(s).segment<3>(3 * Index(v)) - X.col(s).segment<3>(3 * Index(root));
+                F.col(s).segment<3>(3 * Index(k)) =
+                    Rt * (X.col(s).segment<3>(3 * Index(v)) - X.col(s).segment<3>(3 * Index(root)));
             }
         } else {
             const Vector3d mean = bc_mean(X.col(s));
-            F.col(s) = X.col(s);
-            for (Index i = 0; i < m_num_dofs / 3; ++i) F.col(s).segment<3>(3 * i) -= mean;
+            for (Index i = 0; i < m_num_dofs / 3; ++i) F.col(s).segment<3>(3 * i) = Rt * (X.col(s).segment<3>(3 * i) - mean);
         }
     }
     return F;
@@ -99,19 +154,20 @@ void BcRelativeEncoding::positions_of_frame(const Scalar* f, const double* targe
     Eigen::Map<const Eigen::Matrix<Scalar, Eigen::Dynamic, 1>> F(f, m_num_features);
     Eigen::Map<const VectorXd> T(targets, 3 * B);
     Eigen::Map<VectorXd> X(x, m_num_dofs);
+    const Matrix3d R = frame_rotation(targets);
     if (m_rod_relative) {
         // Roots take their targets (written for every Dirichlet vertex, then overwritten on
         // the non-root ones, which are decoded like any other vertex: root + feature).
         for (Index b = 0; b < B; ++b) X.segment<3>(3 * Index(m_bc_indices[std::size_t(b)])) = T.segment<3>(3 * b);
         for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
             const auto [v, slot] = m_rod_vertices[k];
-            X.segment<3>(3 * Index(v)) = F.template segment<3>(3 * Index(k)).template cast<double>() + T.segment<3>(3 * Index(slot));
+            X.segment<3>(3 * Index(v)) = R * F.template segment<3>(3 * Index(k)).template cast<double>() + T.segment<3>(3 * Index(slot));
         }
     } else {
         Vector3d mean = Vector3d::Zero();
         for (Index b = 0; b < B; ++b) mean += T.segment<3>(3 * b);
         mean /= double(B);
-        for (Index i = 0; i < m_num_dofs / 3; ++i) X.segment<3>(3 * i) = F.template segment<3>(3 * i).template cast<double>() + mean;
+        for (Index i = 0; i < m_num_dofs / 3; ++i) X.segment<3>(3 * i) = R * F.template segment<3>(3 * i).template cast<double>() + mean;
     }
 }
 
@@ -142,15 +198,25 @@ MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& tar
     return X;
 }
 
-MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x) const
+MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const
 {
-    if (grad_x.rows() != m_num_dofs)
-        throw std::invalid_argument("BcRelativeEncoding::gradient_to_features: expected " +
-                                    std::to_string(m_num_dofs) + " rows, got " + std::to_string(grad_x.rows()));
-    if (!m_rod_relative) return grad_x;  // P = I
+    const Index B = static_cast<Index>(m_bc_indices.size());
+    if (grad_x.rows() != m_num_dofs || targets.rows() != 3 * B || targets.cols() != grad_x.cols())
+        throw std::invalid_argument("BcRelativeEncoding::gradient_to_features: expected " + std::to_string(m_num_dofs) +
+                                    " × S gradients and " + std::to_string(3 * B) + " × S targets, got " +
+                                    std::to_string(grad_x.rows()) + " × " + std::to_string(grad_x.cols()) + " and " +
+                                    std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
+    if (!m_rod_relative && m_frame == EncodingFrame::translation) return grad_x;  // P = I
     MatrixXd G(m_num_features, grad_x.cols());
-    for (std::size_t k = 0; k < m_rod_vertices.size(); ++k)
-        G.middleRows<3>(3 * Index(k)) = grad_x.middleRows<3>(3 * Index(m_rod_vertices[k].first));
+    for (Index s = 0; s < grad_x.cols(); ++s) {
+        const Matrix3d Rt = frame_rotation(targets.col(s).data()).transpose();
+        if (m_rod_relative) {
+            for (std::size_t k = 0; k < m_rod_vertices.size(); ++k)
+                G.col(s).segment<3>(3 * Index(k)) = Rt * grad_x.col(s).segment<3>(3 * Index(m_rod_vertices[k].first));
+        } else {
+            for (Index i = 0; i < m_num_dofs / 3; ++i) G.col(s).segment<3>(3 * i) = Rt * grad_x.col(s).segment<3>(3 * i);
+        }
+    }
     return G;
 }
 

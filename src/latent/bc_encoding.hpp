@@ -4,27 +4,46 @@
 //                    decoding re-applies the prescribed root positions.
 //   cloth, solids:   features = x_i − mean_{j∈B} x_j for every vertex;
 //                    decoding adds the mean of the prescribed Dirichlet targets.
-// Decoding: x = P f + offset(bc_targets), so ∂L/∂f = Pᵀ ∂L/∂x (gradient_to_features).
+// Frame "translation" (the paper's) stops there. Frame "rigid" (issue 14) also removes the
+// boundary's rotation: R is the best-fit (Kabsch) rotation taking the Dirichlet set's
+// rest offsets p⁰_b − c⁰ to its current ones p_b − c, and the features are Rᵀ times the
+// offsets above; decoding applies R of the prescribed targets. A rigid motion of the
+// boundary then leaves the features of a rigidly carried body unchanged, so no latent
+// dimension is spent on the boundary's pose. It needs a Dirichlet set that fixes a
+// rotation (three non-collinear vertices; roots for rods).
+// Decoding: x = P(R) f + offset(bc_targets), so ∂L/∂f = P(R)ᵀ ∂L/∂x (gradient_to_features,
+// which therefore takes the targets too).
 // Rods: features are the non-root vertices in ascending vertex order; every vertex must
 // belong to exactly one rod (mesh.rods) whose root (chain start) is a Dirichlet vertex.
 // Cloth/solids: decoded Dirichlet vertices are not overwritten with their targets (the
 // learning losses' penalty acts on them); for ground-truth frames they coincide.
+#include <string>
 #include <vector>
 
 #include "sim/physics_model.hpp"
 
 namespace lb {
 
+/// The frame the features are expressed in (see above).
+enum class EncodingFrame { translation, rigid };
+/// "translation" / "rigid"; parse throws ConfigError naming the accepted values.
+const char* encoding_frame_name(EncodingFrame frame);
+EncodingFrame parse_encoding_frame(const std::string& text);
+
 class BcRelativeEncoding {
 public:
-    explicit BcRelativeEncoding(const PhysicsSpec& physics);
+    /// Throws ConfigError if the rods are not rooted at Dirichlet vertices, or if the
+    /// rigid frame is asked of a Dirichlet set that does not fix a rotation.
+    explicit BcRelativeEncoding(const PhysicsSpec& physics, EncodingFrame frame = EncodingFrame::translation);
 
     /// F: 3(N − R) for rods, 3N otherwise.
     Index num_features() const { return m_num_features; }
     Index num_dofs() const { return m_num_dofs; }
     bool rod_relative() const { return m_rod_relative; }
-    /// "rod_root" or "dirichlet_mean" (stored in autoencoder files).
-    const char* kind_name() const { return m_rod_relative ? "rod_root" : "dirichlet_mean"; }
+    EncodingFrame frame() const { return m_frame; }
+    /// "rod_root", "dirichlet_mean", "rod_root_rigid" or "dirichlet_rigid" (stored in
+    /// autoencoder files).
+    const char* kind_name() const;
     const std::vector<int>& bc_indices() const { return m_bc_indices; }
 
     /// @param X  3N × S positions (one column per frame) @return F × S features
@@ -39,17 +58,26 @@ public:
                            Eigen::Ref<VectorXd> x) const;
     void to_positions_into(const Eigen::Ref<const Eigen::VectorXf>& f, const Eigen::Ref<const VectorXd>& targets,
                            Eigen::Ref<VectorXd> x) const;
-    /// Chain rule through to_positions: 3N × S position gradients → F × S.
-    MatrixXd gradient_to_features(const MatrixXd& grad_x) const;
+    /// Chain rule through to_positions at the same targets (3B × S; the rigid frame's
+    /// R depends on them): 3N × S position gradients → F × S.
+    MatrixXd gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const;
+    /// The rigid frame's rotation for the Dirichlet positions `p` (3B, xyz interleaved);
+    /// the identity in the translation frame.
+    Matrix3d frame_rotation(const double* p) const;
 
 private:
     template <typename Scalar>
     void positions_of_frame(const Scalar* f, const double* targets, double* x) const;
+    /// The Dirichlet positions of one 3N state (3B).
+    VectorXd bc_positions_of(const Eigen::Ref<const VectorXd>& x) const;
 
     /// Mean of the Dirichlet vertices of one 3N position vector.
     Vector3d bc_mean(const Eigen::Ref<const VectorXd>& x) const;
 
     bool m_rod_relative = false;
+    EncodingFrame m_frame = EncodingFrame::translation;
+    /// Rigid frame: the Dirichlet set's rest offsets from its mean, 3 × B.
+    Eigen::Matrix3Xd m_rest_offsets;
     Index m_num_dofs = 0;
     Index m_num_features = 0;
     std::vector<int> m_bc_indices;

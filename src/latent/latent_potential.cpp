@@ -71,9 +71,9 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
     energies_of(X, bc_targets, X_prev, X_prev2, options, check_finite, out);
     if (options.gradient) {
         if (m_frozen)
-            m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(out.grad_x), out.grad_z);
+            m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(out.grad_x, bc_targets), out.grad_z);
         else
-            out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x);
+            out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x, bc_targets);
     }
     if (options.decoded) out.X = std::move(X);
     return out;

@@ -41,6 +41,13 @@ void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
     o.validation_fraction = t.get_double("validation", o.validation_fraction);
     o.batch_norm = t.get_bool("batch_norm", o.batch_norm);
     o.residual = t.get_bool("residual", o.residual);
+    if (t.has("frame")) {
+        try {
+            o.frame = parse_encoding_frame(t.get_string("frame", ""));
+        } catch (const ConfigError& e) {
+            t.fail("frame", e.what());
+        }
+    }
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");
     if (!(o.validation_fraction > 0.0 && o.validation_fraction < 1.0)) t.fail("validation", "must lie in (0, 1)");
@@ -97,7 +104,23 @@ SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOp
         merge_toml(merged, *s.raw_table("training"));
     }
     ConfigTable defaults(merged, scene_training ? "scenes.training" : "training", source);
+    // `integrators = [...]`: only these entries on this scene (e.g. an autoencoder variant
+    // that some methods cannot use); default every entry.
+    std::set<std::string> only;
+    if (s.has("integrators")) {
+        std::set<std::string> known;
+        for (ConfigTable entry : entries) known.insert(entry.require_string("name"));
+        for (const std::string& name : s.get_string_array("integrators", {})) {
+            if (!known.count(name)) s.fail("integrators", "no [[integrators]] entry is named '" + name + "'");
+            only.insert(name);
+        }
+        if (only.empty()) s.fail("integrators", "lists no integrator (leave it out to run every one)");
+    }
     for (ConfigTable entry : entries) {
+        if (!only.empty() && !only.count(entry.require_string("name"))) {
+            entry.accept_all();
+            continue;
+        }
         MethodSpec m;
         m.name = entry.require_string("name");
         m.method = registry.parse(entry, defaults);

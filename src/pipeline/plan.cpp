@@ -44,6 +44,7 @@ std::string autoencoder_stage_key(const std::string& sim_key, const AutoencoderO
     s << o.latent_dim << "|" << format_list(o.hidden) << "|" << o.pca_dim << "|" << o.batch_norm << o.residual << "|"
       << o.epochs << "|" << o.batch_size << "|" << o.learning_rate << "|" << o.validation_fraction << "|" << o.patience
       << "|" << o.seed;
+    if (o.frame != EncodingFrame::translation) s << "|frame=" << encoding_frame_name(o.frame);  // older keys unchanged
     return fnv1a64_hex(sim_key + "|autoencoder|" + s.str());
 }
 

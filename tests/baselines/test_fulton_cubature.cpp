@@ -33,6 +33,22 @@ TEST(PcaSplitDecoder, ReproducesTheDecoder)
     }
 }
 
+/// An autoencoder in the boundary's rigid frame decodes x = R(t) U g(z) + c(t): the split's
+/// precomputed PCA coordinates would be wrong, so it is refused by name, not used.
+TEST(PcaSplitDecoder, RefusesTheRigidFrame)
+{
+    FultonProblem p("cantilever", 40, 30, 20);
+    AutoencoderOptions o = p.ae->options();
+    o.frame = EncodingFrame::rigid;
+    Autoencoder rigid(p.data.physics, o, 1);
+    try {
+        PcaSplitDecoder split(rigid, *p.model);
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("rigid frame"), std::string::npos) << e.what();
+    }
+}
+
 /// The greedy cubature reaches its tolerance on the training reconstructions and
 /// matches the exact reduced force and energy on held-out reconstructions.
 void check_cubature(const std::string& scene, int frames, int train_frames, double tolerance,

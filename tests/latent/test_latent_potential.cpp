@@ -134,7 +134,7 @@ TEST_P(LatentPotentialPhysics, BatchAgreesWithSingleSamplesAndTheDirectComputati
     EXPECT_TRUE(close(e.energies, energies, 1e-12, "energies vs direct"));
     EXPECT_NEAR(e.objective, options.weights.dot(energies) / options.normalization,
                 1e-12 * std::abs(e.objective));
-    EXPECT_TRUE(close(e.grad_z, p.ae->decoder_vjp(p.Z, grad_x), 1e-12, "grad_z vs direct"));
+    EXPECT_TRUE(close(e.grad_z, p.ae->decoder_vjp(p.Z, grad_x, p.T), 1e-12, "grad_z vs direct"));
 
     // Single samples: the same energies; the batch gradient is (w_i / n) × theirs.
     for (Index i = 0; i < B; ++i) {

@@ -113,6 +113,37 @@ TEST(Experiment, RejectsBadKeysByName)
     text = kTiny;
     text.replace(text.find("name = \"sup\""), 12, "name = \"a/b\"");
     EXPECT_THROW(load_experiment(write_experiment("bad_name", text), builtin_methods()), ConfigError);
+    // A scene may run a subset of the integrators; a name that no entry has is refused.
+    text = kTiny;
+    text.replace(text.find("variant = \"small\""), 17, "variant = \"small\"\nintegrators = [\"ours\", \"pca\"]");
+    {
+        const ExperimentConfig subset = load_experiment(write_experiment("scene_subset", text), builtin_methods());
+        ASSERT_EQ(subset.scenes[0].methods.size(), 2u);
+        EXPECT_EQ(subset.scenes[0].methods[0].name, "ours");
+        EXPECT_EQ(subset.scenes[0].methods[1].name, "pca");
+    }
+    text = kTiny;
+    text.replace(text.find("variant = \"small\""), 17, "variant = \"small\"\nintegrators = [\"ours\", \"nope\"]");
+    try {
+        load_experiment(write_experiment("scene_subset_bad", text), builtin_methods());
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("integrators"), std::string::npos) << e.what();
+    }
+    // The autoencoder's frame (issue 14): "translation" or "rigid", anything else named.
+    text = kTiny;
+    text.replace(text.find("pca = 8"), 7, "pca = 8\nframe = \"rigid\"");
+    EXPECT_EQ(load_experiment(write_experiment("rigid_frame", text), builtin_methods()).scenes[0].autoencoder.frame,
+              EncodingFrame::rigid);
+    text = kTiny;
+    text.replace(text.find("pca = 8"), 7, "pca = 8\nframe = \"rotation\"");
+    try {
+        load_experiment(write_experiment("bad_frame", text), builtin_methods());
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("autoencoder.frame"), std::string::npos) << e.what();
+    }
     text = kTiny;
     text.replace(text.find("method = \"linear_pca\""), 21, "method = \"cubature\"");
     try {
