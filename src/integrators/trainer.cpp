@@ -1,6 +1,7 @@
 #include "integrators/trainer.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <filesystem>
 #include <numeric>
 #include <sstream>
@@ -29,13 +30,44 @@ IntegratorLoss integrator_loss_from_string(const std::string& name)
     throw ConfigError("unknown integrator loss '" + name + "' (expected self_supervised or supervised_l2)");
 }
 
+std::string to_string(BalancingVelocity velocity)
+{
+    return velocity == BalancingVelocity::MeanVelocity ? "mean_velocity" : "mean_speed";
+}
+
+BalancingVelocity balancing_velocity_from_string(const std::string& name)
+{
+    if (name == "mean_velocity") return BalancingVelocity::MeanVelocity;
+    if (name == "mean_speed") return BalancingVelocity::MeanSpeed;
+    throw ConfigError("unknown balancing velocity '" + name + "' (expected mean_velocity or mean_speed)");
+}
+
+VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                          double dt, BalancingVelocity velocity)
+{
+    assert(X_prev.rows() == X_prev2.rows() && X_prev.cols() == X_prev2.cols() && X_prev.rows() % 3 == 0);
+    VectorXd speeds(X_prev.cols());
+    for (Index i = 0; i < X_prev.cols(); ++i) {
+        const VectorXd d = X_prev.col(i) - X_prev2.col(i);  // N × 3 as rows: displacements over h
+        speeds[i] = velocity == BalancingVelocity::MeanVelocity ? (as_rows(d).colwise().mean() / dt).norm()
+                                                                : as_rows(d).rowwise().norm().mean() / dt;
+    }
+    return speeds;
+}
+
+std::string IntegratorTrainOptions::balancing_text() const
+{
+    if (!data_balancing) return "balancing off";
+    return balancing_velocity == BalancingVelocity::MeanSpeed ? "balancing on (mean speed)" : "balancing on";
+}
+
 std::string IntegratorTrainOptions::describe() const
 {
     std::ostringstream s;
     s << to_string(loss) << ", hidden [";
     for (size_t i = 0; i < hidden.size(); ++i) s << (i ? "," : "") << hidden[i];
     s << "], noise " << (training_noise ? "on" : "off");
-    if (loss == IntegratorLoss::SelfSupervised) s << ", balancing " << (data_balancing ? "on" : "off");
+    if (loss == IntegratorLoss::SelfSupervised) s << ", " << balancing_text();
     s << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
     return s.str();
 }
@@ -53,6 +85,9 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     if (self_supervised) {
         s << ";balancing=" << (o.data_balancing ? "on" : "off");
         if (o.data_balancing) s << ";balancing_floor=" << nn::exact_text(o.balancing_floor);
+        // Only when not the default, so fits made before the option keep their fingerprints.
+        if (o.data_balancing && o.balancing_velocity != BalancingVelocity::MeanVelocity)
+            s << ";balancing_velocity=" << to_string(o.balancing_velocity);
         s << ";penalty_weight=" << nn::exact_text(m_potential.penalty_weight());
     }
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
@@ -169,15 +204,7 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
     const MatrixXd X2 = decoded_inputs(batch, 2);
     LatentEnergyOptions options;
     options.gradient = with_gradient;
-    options.weights = VectorXd::Ones(B);
-    if (m_options.data_balancing) {
-        const double dt = m_model.dt();
-        for (Index i = 0; i < B; ++i) {
-            const VectorXd x1 = X1.col(i), x2 = X2.col(i);
-            const Vector3d v = (as_rows(x1) - as_rows(x2)).colwise().mean().transpose() / dt;
-            options.weights[i] = 1.0 / std::max(v.norm(), m_velocity_floor);
-        }
-    }
+    options.weights = m_options.data_balancing ? balancing_weights(X1, X2) : VectorXd::Ones(B);
     options.normalization = double(B);
     const LatentEnergies e = m_potential.evaluate(Zt, batch.targets, X1, X2, options);
     if (with_gradient) model.backward(e.grad_z);
@@ -218,14 +245,14 @@ double IntegratorTrainer::loss(LatentMlpModel& model, const IntegratorBatch& bat
 double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 {
     if (m_decoded_prev.cols() != samples.size()) cache_decoded_inputs(samples);
-    const MatrixXd& X1 = m_decoded_prev;
-    const MatrixXd& X2 = m_decoded_prev2;
-    double sum = 0.0;
-    for (Index i = 0; i < X1.cols(); ++i) {
-        const VectorXd d = X1.col(i) - X2.col(i);
-        sum += (as_rows(d).colwise().mean() / m_model.dt()).norm();
-    }
-    return sum / double(X1.cols());
+    return balancing_speeds(m_decoded_prev, m_decoded_prev2, m_model.dt(), m_options.balancing_velocity).mean();
+}
+
+VectorXd IntegratorTrainer::balancing_weights(const Eigen::Ref<const MatrixXd>& X_prev,
+                                             const Eigen::Ref<const MatrixXd>& X_prev2) const
+{
+    const VectorXd speeds = balancing_speeds(X_prev, X_prev2, m_model.dt(), m_options.balancing_velocity);
+    return speeds.unaryExpr([&](double v) { return 1.0 / std::max(v, m_velocity_floor); });
 }
 
 namespace {

@@ -140,6 +140,56 @@ TEST(DataBalancing, DividesEachSampleByItsMeanVelocity)
     }
 }
 
+// Rotation about the centroid: the mean vertex velocity vanishes (eq. 6 read literally puts
+// every such sample at the floor), the mean vertex speed does not. A translation has equal
+// speeds everywhere, so both give the same weight.
+TEST(DataBalancing, MeanSpeedWeighsRotationsThatTheMeanVelocityPutsAtTheFloor)
+{
+    TinyProblem p;
+    const double dt = p.model->dt();
+    const VectorXd rest = flatten(p.data.physics.mesh.rest_positions);
+    const Vector3d centroid = as_rows(rest).colwise().mean().transpose();
+    const double floor = 1e-3;
+    MatrixXd rotated(rest.size(), 3), translated(rest.size(), 3), before(rest.size(), 3);
+    for (Index i = 0; i < 3; ++i) {
+        before.col(i) = rest;
+        // 0.5, 1, 1.5 rad/s about three axes through the centroid.
+        const Matrix3d R = Eigen::AngleAxisd(0.5 * double(i + 1) * dt, Vector3d::Unit(i)).toRotationMatrix();
+        VectorXd x = rest;
+        for (Index j = 0; j < rest.size() / 3; ++j) x.segment<3>(3 * j) = R * (rest.segment<3>(3 * j) - centroid) + centroid;
+        rotated.col(i) = x;
+        translated.col(i) = rest + (VectorXd::LinSpaced(3, 0.1, 0.3).replicate(rest.size() / 3, 1) * double(i + 1) * dt);
+    }
+    IntegratorTrainOptions o;
+    o.balancing_velocity = BalancingVelocity::MeanVelocity;
+    IntegratorTrainer velocity(*p.model, *p.ae, o);
+    o.balancing_velocity = BalancingVelocity::MeanSpeed;
+    IntegratorTrainer speed(*p.model, *p.ae, o);
+    velocity.set_velocity_floor(floor);
+    speed.set_velocity_floor(floor);
+
+    const VectorXd at_floor = velocity.balancing_weights(rotated, before);
+    const VectorXd by_speed = speed.balancing_weights(rotated, before);
+    for (Index i = 0; i < 3; ++i) {
+        EXPECT_LT(balancing_speeds(rotated.col(i), before.col(i), dt, BalancingVelocity::MeanVelocity)[0], 1e-12);
+        EXPECT_EQ(at_floor[i], 1.0 / floor) << "rotation " << i;
+        // Independently: the mean over vertices of |ω × r| = mean |x_{t−1} − x_{t−2}| / h.
+        double mean_speed = 0.0;
+        for (Index j = 0; j < rest.size() / 3; ++j)
+            mean_speed += (rotated.col(i).segment<3>(3 * j) - rest.segment<3>(3 * j)).norm() / dt;
+        mean_speed /= double(rest.size() / 3);
+        ASSERT_GT(mean_speed, 10.0 * floor);
+        EXPECT_NEAR(by_speed[i], 1.0 / mean_speed, 1e-12 / mean_speed) << "rotation " << i;
+    }
+    const VectorXd t_velocity = velocity.balancing_weights(translated, before);
+    const VectorXd t_speed = speed.balancing_weights(translated, before);
+    for (Index i = 0; i < 3; ++i) {
+        const double expected = 1.0 / (VectorXd::LinSpaced(3, 0.1, 0.3).norm() * double(i + 1));
+        EXPECT_NEAR(t_velocity[i], expected, 1e-12 * expected) << "translation " << i;
+        EXPECT_NEAR(t_speed[i], expected, 1e-12 * expected) << "translation " << i;
+    }
+}
+
 TEST(SelfSupervisedLoss, DecreasesOnATinyScene)
 {
     TinyProblem p;

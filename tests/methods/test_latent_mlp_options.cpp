@@ -53,6 +53,39 @@ TEST(LatentMlpOptions, SelfSupervisedKeepsThePapersSwitches)
               "self_supervised, noise off, balancing off");
 }
 
+// Data balancing by the mean vertex speed (issue 14): a switch of its own, in the options
+// text (the cache key) only when it is not the paper's default, so fits made before it keep
+// their keys; named in table rows; ignored by the supervised loss; a bad value names the key.
+TEST(LatentMlpOptions, BalancingVelocityIsInTheKeyOnlyWhenNotTheDefault)
+{
+    const std::string paper = parse("loss = \"self_supervised\"\n")->options_text();
+    EXPECT_EQ(paper.find("balancing_velocity"), std::string::npos) << paper;
+    EXPECT_EQ(parse("balancing_velocity = \"mean_velocity\"\n")->options_text(), paper);
+
+    const std::unique_ptr<Method> speed = parse("balancing_velocity = \"mean_speed\"\n");
+    EXPECT_NE(speed->options_text().find("balancing_velocity = 'mean_speed'"), std::string::npos)
+        << speed->options_text();
+    EXPECT_EQ(speed->summary(), "self_supervised, noise on, balancing on (mean speed)");
+    EXPECT_EQ(parse(speed->options_text())->options_text(), speed->options_text()) << "not re-parsable";
+    // Without balancing there is nothing to weigh; the supervised loss never balances.
+    EXPECT_EQ(parse("balancing = false\nbalancing_velocity = \"mean_speed\"\n")->summary(),
+              "self_supervised, noise on, balancing off");
+    EXPECT_EQ(parse("balancing = false\nbalancing_velocity = \"mean_speed\"\n")->options_text(),
+              parse("balancing = false\n")->options_text());
+    EXPECT_EQ(parse("loss = \"supervised_l2\"\nbalancing_velocity = \"mean_speed\"\n")->options_text(),
+              parse("loss = \"supervised_l2\"\n")->options_text());
+
+    try {
+        parse("balancing_velocity = \"median_speed\"\n");
+        ADD_FAILURE() << "no ConfigError";
+    } catch (const ConfigError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("balancing_velocity"), std::string::npos) << what;
+        EXPECT_NE(what.find("mean_velocity or mean_speed"), std::string::npos) << what;
+    }
+    EXPECT_THROW(parse("balancing_velocity = 1\n"), ConfigError);
+}
+
 // A suite's `seeds` reach a learned method through set_seed and change its cache key;
 // methods whose fit has no seed refuse it and are fitted once.
 TEST(LatentMlpOptions, SetSeedChangesTheOptionsOfLearnedMethodsOnly)

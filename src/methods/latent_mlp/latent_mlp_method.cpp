@@ -1,5 +1,6 @@
 #include "methods/latent_mlp/latent_mlp_method.hpp"
 
+#include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/parse.hpp"
 #include "integrators/trainer.hpp"
@@ -23,6 +24,12 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
     o.max_seconds = t.get_double("max_seconds", o.max_seconds);
     o.noise_fraction = t.get_double("noise_fraction", o.noise_fraction);
     o.balancing_floor = t.get_double("balancing_floor", o.balancing_floor);
+    const std::string velocity = t.get_string("balancing_velocity", to_string(o.balancing_velocity));
+    try {
+        o.balancing_velocity = balancing_velocity_from_string(velocity);
+    } catch (const ConfigError& e) {
+        t.fail("balancing_velocity", e.what());
+    }
     o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (o.epochs < 1) t.fail("epochs", "must be at least 1");
@@ -68,6 +75,9 @@ public:
         if (o.loss == IntegratorLoss::SelfSupervised) {  // the supervised loss has no balancing
             t.insert_or_assign("balancing", o.data_balancing);
             t.insert_or_assign("balancing_floor", o.balancing_floor);
+            // Only when not the default: the text is the cache key of fits made before the option.
+            if (o.data_balancing && o.balancing_velocity != BalancingVelocity::MeanVelocity)
+                t.insert_or_assign("balancing_velocity", to_string(o.balancing_velocity));
         }
         t.insert_or_assign("penalty_weight", o.penalty_weight);
         t.insert_or_assign("seed", (long long)o.seed);
@@ -79,8 +89,8 @@ public:
     {
         if (m_options.loss == IntegratorLoss::SupervisedL2)
             return m_options.training_noise ? "supervised_l2 + noise" : "supervised_l2";
-        return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", balancing " +
-               (m_options.data_balancing ? "on" : "off");
+        return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", " +
+               m_options.balancing_text();
     }
     std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
