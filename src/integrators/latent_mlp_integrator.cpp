@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/timer.hpp"
+#include "sim/physics_model.hpp"
 #include "io/hdf5.hpp"
 #include "nn/serialization.hpp"
 
@@ -55,6 +56,7 @@ void LatentMlpModel::save(h5::File& file, const std::string& prefix)
     file.set_attribute("/", prefix + "param_dim", (long long)param_dim);
     file.set_attribute("/", prefix + "loss", loss);
     file.set_attribute("/", prefix + "description", description);
+    file.set_attribute("/", prefix + "overwrite_dirichlet", (long long)overwrite_dirichlet);
 }
 
 LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& prefix)
@@ -69,6 +71,9 @@ LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& pre
     m.param_dim = Index(file.attribute_int("/", prefix + "param_dim"));
     m.loss = file.attribute_string("/", prefix + "loss");
     m.description = file.attribute_string("/", prefix + "description");
+    // Absent in files written before the option: the decoded Dirichlet vertices were kept.
+    const std::string overwrite = prefix + "overwrite_dirichlet";
+    m.overwrite_dirichlet = file.has_attribute("/", overwrite) && file.attribute_int("/", overwrite) != 0;
     if (m.network.in_features() != m.input_dim() || m.network.out_features() != m.latent_dim ||
         m.output_scale.size() != m.latent_dim) {
         throw IoError("'" + file.path() + "': integrator network shapes disagree with its latent/parameter sizes");
@@ -120,6 +125,7 @@ void LatentMlpIntegrator::decode_only(const BoundaryState& bc)
     m_zf = m_z.cast<float>();  // preallocated: no allocation per frame
     const auto features = m_decoder_net.evaluate(m_zf);
     m_autoencoder->encoding().to_positions_into(features, bc.targets, m_x);
+    if (m_model.overwrite_dirichlet) overwrite_dirichlet(m_autoencoder->encoding().bc_indices(), bc.targets, m_x);
 }
 
 StepTiming LatentMlpIntegrator::step(const BoundaryState& bc)

@@ -9,7 +9,8 @@
 // as the paper's, with a well-scaled output at initialisation.
 //
 // Inference runs the integrator and the decoder through the float
-// InferenceNetwork (BatchNorm folded, no allocation per step).
+// InferenceNetwork (BatchNorm folded, no allocation per step). A model trained with
+// overwrite_dirichlet reports positions whose Dirichlet vertices are the frame's targets.
 #include <memory>
 
 #include "integrators/integrator.hpp"
@@ -30,6 +31,8 @@ struct LatentMlpModel {
     VectorXd output_scale;     ///< s (latent)
     std::string loss;          ///< how it was trained: "self_supervised" or "supervised_l2"
     std::string description;   ///< e.g. "noise on, balancing on"
+    /// Decoded Dirichlet vertices replaced by the frame's targets (trained so; issue 14).
+    bool overwrite_dirichlet = false;
 
     Index input_dim() const { return 2 * latent_dim + 3 * param_dim; }
     /// Batched forward in double (training), columns are samples.

@@ -61,6 +61,11 @@ std::string IntegratorTrainOptions::balancing_text() const
     return balancing_velocity == BalancingVelocity::MeanSpeed ? "balancing on (mean speed)" : "balancing on";
 }
 
+std::string IntegratorTrainOptions::representation_text() const
+{
+    return overwrite_dirichlet ? ", Dirichlet overwritten" : "";
+}
+
 std::string IntegratorTrainOptions::describe() const
 {
     std::ostringstream s;
@@ -68,7 +73,7 @@ std::string IntegratorTrainOptions::describe() const
     for (size_t i = 0; i < hidden.size(); ++i) s << (i ? "," : "") << hidden[i];
     s << "], noise " << (training_noise ? "on" : "off");
     if (loss == IntegratorLoss::SelfSupervised) s << ", " << balancing_text();
-    s << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
+    s << representation_text() << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
     return s.str();
 }
 
@@ -90,6 +95,8 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
             s << ";balancing_velocity=" << to_string(o.balancing_velocity);
         s << ";penalty_weight=" << nn::exact_text(m_potential.penalty_weight());
     }
+    // Representation switches (issue 14), only when on: the fingerprints of earlier fits stay.
+    if (o.overwrite_dirichlet) s << ";overwrite_dirichlet=on";
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
     // Trainer generation 2 (2026-11-30): every sample every epoch, the compiled frozen
     // decoder. Runs of generation 1 (the last partial batch dropped) are not resumed.
@@ -139,7 +146,7 @@ IntegratorTrainer::IntegratorTrainer(const PhysicsModel& model, Autoencoder& aut
     : m_model(model),
       m_autoencoder(autoencoder),
       m_options(std::move(options)),
-      m_potential(model, autoencoder, m_options.penalty_weight)
+      m_potential(model, autoencoder, m_options.penalty_weight, m_options.overwrite_dirichlet)
 {
 }
 
@@ -316,6 +323,7 @@ void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& sa
     }
     model.loss = to_string(m_options.loss);
     model.description = m_options.describe();
+    model.overwrite_dirichlet = m_options.overwrite_dirichlet;
 }
 
 nn::TrainingLoopOptions IntegratorTrainer::loop_options() const

@@ -21,6 +21,10 @@
 // Training noise: every batch is doubled with copies whose z_{t−1}, z_{t−2} get uniform
 //   noise U(−a, a), a = noise_fraction × the batch's per-component standard deviation;
 //   boundary parameters unchanged (paper eq. 5).
+// Dirichlet overwrite (overwrite_dirichlet): the decoded positions — the prediction and the
+//   inputs x_{t−1}, x_{t−2}, in training and in rollouts — have their Dirichlet vertices
+//   replaced by the frame's targets (LatentPotential), so the penalty is 0 and the loss has no
+//   gradient through the Dirichlet rows. Off by default (the paper decodes them and penalises).
 // The batch loss is the mean over its (possibly doubled) samples. Noise is an option of
 //   either loss; the method parser (methods/latent_mlp) leaves it off for supervised_l2 unless
 //   asked for, as in the paper, where the baseline differs from the method only in the loss.
@@ -65,12 +69,16 @@ struct IntegratorTrainOptions : nn::TrainingRunOptions {
     BalancingVelocity balancing_velocity = BalancingVelocity::MeanVelocity;
     double balancing_floor = 0.05;
     double penalty_weight = 1e5;  ///< w_bc (cloth, solids)
+    bool overwrite_dirichlet = false;
     std::uint64_t seed = 0;
     /// One line for logs and file attributes.
     std::string describe() const;
     /// "balancing on", "balancing off" or "balancing on (mean speed)": the phrase of
     /// describe() and of table rows.
     std::string balancing_text() const;
+    /// The representation switches that are not the paper's, as phrases to append (e.g.
+    /// ", Dirichlet overwritten"; "" for the paper's): of describe() and of table rows.
+    std::string representation_text() const;
 };
 
 /// Training samples from the training frames of a dataset: for every sequence and

@@ -31,6 +31,46 @@ TEST(LatentMlpModel, NonFiniteOutputScaleIsRefused)
     }
 }
 
+// overwrite_dirichlet (issue 14), as the artefact records it: the rollout's Dirichlet
+// vertices are the frame's targets exactly; every other coordinate is what the model
+// without the switch reports, bit for bit, and that one leaves the decoded rows off target.
+TEST(LatentMlpIntegrator, OverwrittenDirichletVerticesAreTheFrameTargets)
+{
+    testing::TinyProblem p("cloth", 12);
+    const SequenceData& seq = p.data.sequences[0];
+    auto state = [&](Index t) {
+        return BoundaryState{seq.bc_params.row(t).transpose(), seq.bc_positions.row(t).transpose()};
+    };
+    const Index frames = 6;
+    auto roll = [&](bool overwrite) {
+        LatentMlpModel m = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), {8}, 4);
+        fit_input_statistics(m, p.samples);
+        m.overwrite_dirichlet = overwrite;
+        const std::string path = std::string(LB_TEST_TMP_DIR) + "/overwrite_dirichlet.h5";
+        {
+            h5::File f = h5::File::create(path);
+            m.save(f, "integrator.");
+        }
+        LatentMlpIntegrator integrator("ours", p.ae, LatentMlpModel::load(h5::File::open(path), "integrator."));
+        integrator.reset(seq.positions.row(0).transpose(), state(0), seq.positions.row(1).transpose(), state(1));
+        MatrixXd X(p.model->num_dofs(), frames);
+        for (Index t = 2; t < 2 + frames; ++t) {
+            integrator.step(state(t));
+            X.col(t - 2) = integrator.positions();
+        }
+        return X;
+    };
+    const MatrixXd on = roll(true), off = roll(false);
+    const auto& bc = p.model->bc_indices();
+    MatrixXd expected = off;
+    for (Index t = 2; t < 2 + frames; ++t) {
+        for (size_t b = 0; b < bc.size(); ++b)
+            expected.col(t - 2).segment<3>(3 * Index(bc[b])) = seq.bc_positions.block<1, 3>(t, 3 * Index(b)).transpose();
+    }
+    EXPECT_EQ(on, expected);
+    EXPECT_NE(off, expected) << "the decoded Dirichlet rows should be off target without the switch";
+}
+
 TEST(Rollout, FullSpaceReproducesGroundTruth)
 {
     testing::TinyProblem p("cloth", 40);

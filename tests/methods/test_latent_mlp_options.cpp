@@ -86,6 +86,30 @@ TEST(LatentMlpOptions, BalancingVelocityIsInTheKeyOnlyWhenNotTheDefault)
     EXPECT_THROW(parse("balancing_velocity = 1\n"), ConfigError);
 }
 
+// Dirichlet overwrite on decode (issue 14): for either loss (rollouts decode for both), in
+// the key only when on, named in table rows, a non-boolean refused by name.
+TEST(LatentMlpOptions, OverwriteDirichletIsInTheKeyOnlyWhenOn)
+{
+    const std::string paper = parse("loss = \"self_supervised\"\n")->options_text();
+    EXPECT_EQ(paper.find("overwrite_dirichlet"), std::string::npos) << paper;
+    EXPECT_EQ(parse("overwrite_dirichlet = false\n")->options_text(), paper);
+
+    const std::unique_ptr<Method> on = parse("overwrite_dirichlet = true\n");
+    EXPECT_NE(on->options_text().find("overwrite_dirichlet = true"), std::string::npos) << on->options_text();
+    EXPECT_EQ(on->summary(), "self_supervised, noise on, balancing on, Dirichlet overwritten");
+    EXPECT_EQ(parse(on->options_text())->options_text(), on->options_text()) << "not re-parsable";
+    const std::unique_ptr<Method> supervised = parse("loss = \"supervised_l2\"\noverwrite_dirichlet = true\n");
+    EXPECT_EQ(supervised->summary(), "supervised_l2, Dirichlet overwritten");
+    EXPECT_NE(supervised->options_text(), parse("loss = \"supervised_l2\"\n")->options_text());
+
+    try {
+        parse("overwrite_dirichlet = \"yes\"\n");
+        ADD_FAILURE() << "no ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("overwrite_dirichlet"), std::string::npos) << e.what();
+    }
+}
+
 // A suite's `seeds` reach a learned method through set_seed and change its cache key;
 // methods whose fit has no seed refuse it and are fitted once.
 TEST(LatentMlpOptions, SetSeedChangesTheOptionsOfLearnedMethodsOnly)

@@ -31,6 +31,7 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
         t.fail("balancing_velocity", e.what());
     }
     o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
+    o.overwrite_dirichlet = t.get_bool("overwrite_dirichlet", o.overwrite_dirichlet);
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (o.epochs < 1) t.fail("epochs", "must be at least 1");
     if (o.batch_size < 1) t.fail("batch", "must be at least 1");
@@ -80,6 +81,7 @@ public:
                 t.insert_or_assign("balancing_velocity", to_string(o.balancing_velocity));
         }
         t.insert_or_assign("penalty_weight", o.penalty_weight);
+        if (o.overwrite_dirichlet) t.insert_or_assign("overwrite_dirichlet", true);  // only when on: earlier keys stay
         t.insert_or_assign("seed", (long long)o.seed);
         t.insert_or_assign("max_seconds", o.max_seconds);
         return to_toml_string(t);
@@ -88,9 +90,10 @@ public:
     std::string summary() const override
     {
         if (m_options.loss == IntegratorLoss::SupervisedL2)
-            return m_options.training_noise ? "supervised_l2 + noise" : "supervised_l2";
+            return (m_options.training_noise ? "supervised_l2 + noise" : "supervised_l2") +
+                   m_options.representation_text();
         return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", " +
-               m_options.balancing_text();
+               m_options.balancing_text() + m_options.representation_text();
     }
     std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
