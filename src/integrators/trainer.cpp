@@ -63,7 +63,9 @@ std::string IntegratorTrainOptions::balancing_text() const
 
 std::string IntegratorTrainOptions::representation_text() const
 {
-    return overwrite_dirichlet ? ", Dirichlet overwritten" : "";
+    std::string s = overwrite_dirichlet ? ", Dirichlet overwritten" : "";
+    if (boundary_input == BoundaryInputKind::Pose) s += ", boundary pose in p";
+    return s;
 }
 
 std::string IntegratorTrainOptions::describe() const
@@ -97,6 +99,7 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     }
     // Representation switches (issue 14), only when on: the fingerprints of earlier fits stay.
     if (o.overwrite_dirichlet) s << ";overwrite_dirichlet=on";
+    if (o.boundary_input != BoundaryInputKind::Velocity) s << ";boundary_input=" << to_string(o.boundary_input);
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
     // Trainer generation 2 (2026-11-30): every sample every epoch, the compiled frozen
     // decoder. Runs of generation 1 (the last partial batch dropped) are not resumed.
@@ -104,15 +107,16 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     return s.str();
 }
 
-TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
+TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data, const BoundaryInput& boundary)
 {
     Index total = 0;
     for (const auto& s : data.sequences) total += std::max<Index>(s.train_frames - 2, 0);
     if (total == 0) throw Error("dataset has no training samples (every sequence needs train_frames ≥ 3)");
     const Index L = ae.latent_dim();
-    const Index P = data.sequences.front().bc_params.cols();
+    const Index P = boundary.size(data.sequences.front().bc_params.cols());
     const Index B3 = data.sequences.front().bc_positions.cols();
     TrainingSamples out;
+    out.boundary_input = boundary.kind();
     out.z_prev.resize(L, total);
     out.z_prev2.resize(L, total);
     out.z_target.resize(L, total);
@@ -130,9 +134,12 @@ TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
             out.z_prev.col(k) = Z.col(t - 1);
             out.z_prev2.col(k) = Z.col(t - 2);
             out.z_target.col(k) = Z.col(t);
-            out.p.col(k) = s.bc_params.row(t).transpose();
-            out.p_prev.col(k) = s.bc_params.row(t - 1).transpose();
-            out.p_prev2.col(k) = s.bc_params.row(t - 2).transpose();
+            auto p_of = [&](Index frame) {
+                return boundary.of_frame(s.bc_params.row(frame).transpose(), s.bc_positions.row(frame).transpose());
+            };
+            out.p.col(k) = p_of(t);
+            out.p_prev.col(k) = p_of(t - 1);
+            out.p_prev2.col(k) = p_of(t - 2);
             out.targets.col(k) = s.bc_positions.row(t).transpose();
             out.targets_prev.col(k) = s.bc_positions.row(t - 1).transpose();
             out.targets_prev2.col(k) = s.bc_positions.row(t - 2).transpose();
@@ -324,6 +331,12 @@ void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& sa
     model.loss = to_string(m_options.loss);
     model.description = m_options.describe();
     model.overwrite_dirichlet = m_options.overwrite_dirichlet;
+    model.boundary = boundary_input();
+    if (samples.boundary_input != m_options.boundary_input || samples.p.rows() != model.param_dim)
+        throw Error("integrator training: samples with " + std::to_string(samples.p.rows()) + " boundary parameters (" +
+                    to_string(samples.boundary_input) + ") for a network taking " + std::to_string(model.param_dim) +
+                    " (" + to_string(m_options.boundary_input) +
+                    "): make the samples with the trainer's boundary_input()");
 }
 
 nn::TrainingLoopOptions IntegratorTrainer::loop_options() const

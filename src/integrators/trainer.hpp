@@ -25,6 +25,8 @@
 //   inputs x_{t−1}, x_{t−2}, in training and in rollouts — have their Dirichlet vertices
 //   replaced by the frame's targets (LatentPotential), so the penalty is 0 and the loss has no
 //   gradient through the Dirichlet rows. Off by default (the paper decodes them and penalises).
+// Boundary input (boundary_input): p_t holds the scene's boundary velocities ("velocity", the
+//   paper's) or those and the Dirichlet targets' rigid pose ("pose"; latent/boundary_input.hpp).
 // The batch loss is the mean over its (possibly doubled) samples. Noise is an option of
 //   either loss; the method parser (methods/latent_mlp) leaves it off for supervised_l2 unless
 //   asked for, as in the paper, where the baseline differs from the method only in the loss.
@@ -70,6 +72,7 @@ struct IntegratorTrainOptions : nn::TrainingRunOptions {
     double balancing_floor = 0.05;
     double penalty_weight = 1e5;  ///< w_bc (cloth, solids)
     bool overwrite_dirichlet = false;
+    BoundaryInputKind boundary_input = BoundaryInputKind::Velocity;  ///< what p_t holds
     std::uint64_t seed = 0;
     /// One line for logs and file attributes.
     std::string describe() const;
@@ -83,15 +86,17 @@ struct IntegratorTrainOptions : nn::TrainingRunOptions {
 
 /// Training samples from the training frames of a dataset: for every sequence and
 /// t ∈ [2, train_frames): latents of frames t−1, t−2 (encoded ground truth), the
-/// boundary parameters of t, t−1, t−2, the ground-truth latent of t, and the
-/// Dirichlet targets of the three frames. Columns are samples.
+/// boundary parameters p of t, t−1, t−2 (as `boundary` makes them from the scene's
+/// parameters and targets), the ground-truth latent of t, and the Dirichlet targets of the
+/// three frames. Columns are samples.
 struct TrainingSamples {
     MatrixXd z_prev, z_prev2, z_target;          ///< latent × S
     MatrixXd p, p_prev, p_prev2;                 ///< P × S
     MatrixXd targets, targets_prev, targets_prev2;  ///< 3B × S
+    BoundaryInputKind boundary_input = BoundaryInputKind::Velocity;  ///< how p was made
     Index size() const { return z_prev.cols(); }
 };
-TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data);
+TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data, const BoundaryInput& boundary = {});
 
 /// The model's input standardiser (from the samples' inputs) and output scale s (the
 /// per-component standard deviation of z_t − z_{t−1}, 1 where it vanishes).
@@ -133,6 +138,8 @@ public:
     /// The learner train() hands to the shared loop (after prepare()); `model` and
     /// `samples` must outlive it. For nn::EpochRunner (the train_epoch benchmarks).
     std::unique_ptr<nn::Learner> learner(LatentMlpModel& model, const TrainingSamples& samples);
+    /// p_t as options.boundary_input says, its pose relative to the physics' rest.
+    BoundaryInput boundary_input() const { return BoundaryInput(m_options.boundary_input, m_model.spec()); }
     /// The velocity floor of data balancing (set by train() or set_velocity_floor()).
     double velocity_floor() const { return m_velocity_floor; }
     void set_velocity_floor(double v) { m_velocity_floor = v; }

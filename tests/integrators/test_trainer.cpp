@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <numeric>
 
+#include "core/error.hpp"
 #include "integrators/integrator_fixture.hpp"
 #include "support/finite_difference.hpp"
 
@@ -101,19 +102,23 @@ TEST(ResolvedOptions, RepresentationSwitchesOnlyWhenNotTheDefault)
     const std::string paper = IntegratorTrainer(*p.model, *p.ae, o).resolved_options(p.samples.size());
     EXPECT_EQ(paper.find("balancing_velocity"), std::string::npos) << paper;
     EXPECT_EQ(paper.find("overwrite_dirichlet"), std::string::npos) << paper;
+    EXPECT_EQ(paper.find("boundary_input"), std::string::npos) << paper;
     o.balancing_velocity = BalancingVelocity::MeanSpeed;
     o.overwrite_dirichlet = true;
+    o.boundary_input = BoundaryInputKind::Pose;
     IntegratorTrainer changed(*p.model, *p.ae, o);
     const std::string text = changed.resolved_options(p.samples.size());
     EXPECT_NE(text.find(";balancing_velocity=mean_speed"), std::string::npos) << text;
     EXPECT_NE(text.find(";overwrite_dirichlet=on"), std::string::npos) << text;
+    EXPECT_NE(text.find(";boundary_input=pose"), std::string::npos) << text;
     EXPECT_EQ(o.describe().find("self_supervised, hidden [256,256,256,256,256], noise on, balancing on (mean speed), "
-                                "Dirichlet overwritten, lr"),
+                                "Dirichlet overwritten, boundary pose in p, lr"),
               0u)
         << o.describe();
 
-    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), {8}, 3);
-    changed.prepare(net, p.samples);
+    const TrainingSamples samples = make_training_samples(*p.ae, p.data, changed.boundary_input());
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), samples.p.rows(), {8}, 3);
+    changed.prepare(net, samples);
     EXPECT_TRUE(net.overwrite_dirichlet);
 }
 
@@ -226,6 +231,39 @@ TEST(DataBalancing, MeanSpeedWeighsRotationsThatTheMeanVelocityPutsAtTheFloor)
         EXPECT_NEAR(t_velocity[i], expected, 1e-12 * expected) << "translation " << i;
         EXPECT_NEAR(t_speed[i], expected, 1e-12 * expected) << "translation " << i;
     }
+}
+
+// boundary_input = "pose": p = [the scene's parameters, the pose of the frame's Dirichlet
+// targets] for each of the three frames; everything else as with the velocities alone; the
+// trainer records the input in the model and refuses samples made the other way.
+TEST(PoseBoundaryInput, SamplesAppendThePoseOfEachFramesTargets)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    o.boundary_input = BoundaryInputKind::Pose;
+    IntegratorTrainer trainer(*p.model, *p.ae, o);
+    const BoundaryInput pose = trainer.boundary_input();
+    const TrainingSamples s = make_training_samples(*p.ae, p.data, pose);
+    const Index P = p.samples.p.rows();
+    ASSERT_EQ(s.p.rows(), P + BoundaryInput::kPoseSize);
+    EXPECT_EQ(s.boundary_input, BoundaryInputKind::Pose);
+    EXPECT_EQ(s.p.topRows(P), p.samples.p);
+    EXPECT_EQ(s.p_prev.topRows(P), p.samples.p_prev);
+    EXPECT_EQ(s.p_prev2.topRows(P), p.samples.p_prev2);
+    EXPECT_EQ(s.z_prev, p.samples.z_prev);
+    EXPECT_EQ(s.targets, p.samples.targets);
+    for (Index i = 0; i < s.size(); ++i) {
+        EXPECT_EQ(s.p.col(i).tail(BoundaryInput::kPoseSize), pose.pose(s.targets.col(i)));
+        EXPECT_EQ(s.p_prev.col(i).tail(BoundaryInput::kPoseSize), pose.pose(s.targets_prev.col(i)));
+        EXPECT_EQ(s.p_prev2.col(i).tail(BoundaryInput::kPoseSize), pose.pose(s.targets_prev2.col(i)));
+    }
+
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), s.p.rows(), {8}, 3);
+    trainer.prepare(net, s);
+    EXPECT_EQ(net.boundary.kind(), BoundaryInputKind::Pose);
+    EXPECT_EQ(net.boundary.rest_targets(), pose.rest_targets());
+    LatentMlpModel velocity_net = LatentMlpModel::create(p.ae->latent_dim(), P, {8}, 3);
+    EXPECT_THROW(trainer.prepare(velocity_net, p.samples), Error);
 }
 
 TEST(SelfSupervisedLoss, DecreasesOnATinyScene)

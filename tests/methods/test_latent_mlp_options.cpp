@@ -3,6 +3,9 @@
 // labelled variant), and no "balancing on" for a loss that ignores it.
 #include <gtest/gtest.h>
 
+#include <string>
+#include <vector>
+
 #include "baselines/builtin_methods.hpp"
 #include "core/error.hpp"
 #include "methods/method.hpp"
@@ -13,6 +16,34 @@ namespace {
 std::unique_ptr<Method> parse(const std::string& options)
 {
     return builtin_methods().parse_text("latent_mlp", options, "test");
+}
+
+/// parse(options) throws a ConfigError whose message holds every one of `parts`.
+void expect_config_error(const std::string& options, const std::vector<std::string>& parts)
+{
+    try {
+        parse(options);
+        ADD_FAILURE() << "no ConfigError for " << options;
+    } catch (const ConfigError& e) {
+        for (const std::string& part : parts)
+            EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
+}
+
+/// A switch of issue 14: absent, or `key = paper_value`, leaves the paper's options text (the
+/// cache key of fits made before the switch); `key = value` puts `shown` into it, re-parsably,
+/// and table rows read `summary`.
+void expect_in_the_key_only_when_not_the_papers(const std::string& key, const std::string& paper_value,
+                                                const std::string& value, const std::string& shown,
+                                                const std::string& summary)
+{
+    const std::string paper = parse("loss = \"self_supervised\"\n")->options_text();
+    EXPECT_EQ(paper.find(key), std::string::npos) << paper;
+    EXPECT_EQ(parse(key + " = " + paper_value + "\n")->options_text(), paper);
+    const std::unique_ptr<Method> m = parse(key + " = " + value + "\n");
+    EXPECT_NE(m->options_text().find(shown), std::string::npos) << m->options_text();
+    EXPECT_EQ(m->summary(), summary);
+    EXPECT_EQ(parse(m->options_text())->options_text(), m->options_text()) << "not re-parsable";
 }
 
 TEST(LatentMlpOptions, SupervisedBaselineTrainsWithoutNoiseAndWithoutBalancing)
@@ -58,15 +89,9 @@ TEST(LatentMlpOptions, SelfSupervisedKeepsThePapersSwitches)
 // their keys; named in table rows; ignored by the supervised loss; a bad value names the key.
 TEST(LatentMlpOptions, BalancingVelocityIsInTheKeyOnlyWhenNotTheDefault)
 {
-    const std::string paper = parse("loss = \"self_supervised\"\n")->options_text();
-    EXPECT_EQ(paper.find("balancing_velocity"), std::string::npos) << paper;
-    EXPECT_EQ(parse("balancing_velocity = \"mean_velocity\"\n")->options_text(), paper);
-
-    const std::unique_ptr<Method> speed = parse("balancing_velocity = \"mean_speed\"\n");
-    EXPECT_NE(speed->options_text().find("balancing_velocity = 'mean_speed'"), std::string::npos)
-        << speed->options_text();
-    EXPECT_EQ(speed->summary(), "self_supervised, noise on, balancing on (mean speed)");
-    EXPECT_EQ(parse(speed->options_text())->options_text(), speed->options_text()) << "not re-parsable";
+    expect_in_the_key_only_when_not_the_papers("balancing_velocity", "\"mean_velocity\"", "\"mean_speed\"",
+                                               "balancing_velocity = 'mean_speed'",
+                                               "self_supervised, noise on, balancing on (mean speed)");
     // Without balancing there is nothing to weigh; the supervised loss never balances.
     EXPECT_EQ(parse("balancing = false\nbalancing_velocity = \"mean_speed\"\n")->summary(),
               "self_supervised, noise on, balancing off");
@@ -75,14 +100,7 @@ TEST(LatentMlpOptions, BalancingVelocityIsInTheKeyOnlyWhenNotTheDefault)
     EXPECT_EQ(parse("loss = \"supervised_l2\"\nbalancing_velocity = \"mean_speed\"\n")->options_text(),
               parse("loss = \"supervised_l2\"\n")->options_text());
 
-    try {
-        parse("balancing_velocity = \"median_speed\"\n");
-        ADD_FAILURE() << "no ConfigError";
-    } catch (const ConfigError& e) {
-        const std::string what = e.what();
-        EXPECT_NE(what.find("balancing_velocity"), std::string::npos) << what;
-        EXPECT_NE(what.find("mean_velocity or mean_speed"), std::string::npos) << what;
-    }
+    expect_config_error("balancing_velocity = \"median_speed\"\n", {"balancing_velocity", "mean_velocity or mean_speed"});
     EXPECT_THROW(parse("balancing_velocity = 1\n"), ConfigError);
 }
 
@@ -90,24 +108,22 @@ TEST(LatentMlpOptions, BalancingVelocityIsInTheKeyOnlyWhenNotTheDefault)
 // the key only when on, named in table rows, a non-boolean refused by name.
 TEST(LatentMlpOptions, OverwriteDirichletIsInTheKeyOnlyWhenOn)
 {
-    const std::string paper = parse("loss = \"self_supervised\"\n")->options_text();
-    EXPECT_EQ(paper.find("overwrite_dirichlet"), std::string::npos) << paper;
-    EXPECT_EQ(parse("overwrite_dirichlet = false\n")->options_text(), paper);
-
-    const std::unique_ptr<Method> on = parse("overwrite_dirichlet = true\n");
-    EXPECT_NE(on->options_text().find("overwrite_dirichlet = true"), std::string::npos) << on->options_text();
-    EXPECT_EQ(on->summary(), "self_supervised, noise on, balancing on, Dirichlet overwritten");
-    EXPECT_EQ(parse(on->options_text())->options_text(), on->options_text()) << "not re-parsable";
+    expect_in_the_key_only_when_not_the_papers("overwrite_dirichlet", "false", "true", "overwrite_dirichlet = true",
+                                               "self_supervised, noise on, balancing on, Dirichlet overwritten");
     const std::unique_ptr<Method> supervised = parse("loss = \"supervised_l2\"\noverwrite_dirichlet = true\n");
     EXPECT_EQ(supervised->summary(), "supervised_l2, Dirichlet overwritten");
     EXPECT_NE(supervised->options_text(), parse("loss = \"supervised_l2\"\n")->options_text());
 
-    try {
-        parse("overwrite_dirichlet = \"yes\"\n");
-        ADD_FAILURE() << "no ConfigError";
-    } catch (const ConfigError& e) {
-        EXPECT_NE(std::string(e.what()).find("overwrite_dirichlet"), std::string::npos) << e.what();
-    }
+    expect_config_error("overwrite_dirichlet = \"yes\"\n", {"overwrite_dirichlet"});
+}
+
+// The boundary pose in p_t (issue 14): in the key only when not the paper's velocities,
+// named in table rows, an unknown value refused naming the key and the accepted values.
+TEST(LatentMlpOptions, BoundaryInputIsInTheKeyOnlyWhenNotTheDefault)
+{
+    expect_in_the_key_only_when_not_the_papers("boundary_input", "\"velocity\"", "\"pose\"", "boundary_input = 'pose'",
+                                               "self_supervised, noise on, balancing on, boundary pose in p");
+    expect_config_error("boundary_input = \"position\"\n", {"boundary_input", "velocity or pose"});
 }
 
 // A suite's `seeds` reach a learned method through set_seed and change its cache key;
