@@ -44,27 +44,6 @@ MatrixXi unique_edges(const MatrixXi& elements)
     return out;
 }
 
-RigidMotion fit_rigid_motion(const MatrixX3d& from, const MatrixX3d& to)
-{
-    RigidMotion m;
-    if (from.rows() == 0) return m;
-    m.from_centroid = from.colwise().mean().transpose();
-    m.to_centroid = to.colwise().mean().transpose();
-    const MatrixX3d p = from.rowwise() - m.from_centroid.transpose();
-    const MatrixX3d q = to.rowwise() - m.to_centroid.transpose();
-    const Matrix3d H = p.transpose() * q;
-    const Eigen::JacobiSVD<Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    // A rotation about the line through collinear points is undetermined (the SVD
-    // completes it arbitrarily): keep the translation only.
-    constexpr double kCollinear = 1e-9;
-    const Vector3d sigma = svd.singularValues();
-    if (!(sigma[1] > kCollinear * sigma[0])) return m;
-    Matrix3d correction = Matrix3d::Identity();
-    if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) correction(2, 2) = -1.0;
-    m.rotation = svd.matrixV() * correction * svd.matrixU().transpose();
-    return m;
-}
-
 MetricContext::MetricContext(const PhysicsModel& model) : m_model(model), m_potential(model, 0.0)
 {
     const VectorXi map = model.dof_to_unknown();

@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "core/rigid_motion.hpp"
 #include "eval/summary_schema.hpp"
 #include "sim/physics_model.hpp"
 
@@ -126,19 +127,6 @@ private:
     std::vector<std::vector<int>> m_vertex_edges;  ///< per vertex, the indices of its edges
     double m_residual_scale = 1.0;
 };
-
-/// A rigid motion p ↦ R (p − from_centroid) + to_centroid.
-struct RigidMotion {
-    Matrix3d rotation = Matrix3d::Identity();
-    Vector3d from_centroid = Vector3d::Zero();
-    Vector3d to_centroid = Vector3d::Zero();
-    Vector3d apply(const Vector3d& p) const { return rotation * (p - from_centroid) + to_centroid; }
-};
-
-/// Least-squares rigid motion taking the points `from` to `to` (each K×3, Kabsch with
-/// reflection correction). Collinear or single points (rotation undetermined): the
-/// translation of the centroid only. No points: the identity.
-RigidMotion fit_rigid_motion(const MatrixX3d& from, const MatrixX3d& to);
 
 /// Summarise a T × kNumMetricColumns table (frames 0, 1 are the given start frames):
 ///  - horizons: the first frame t ≥ 2 above each tier (non-finite counts as above; T if

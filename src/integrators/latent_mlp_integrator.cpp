@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/timer.hpp"
+#include "sim/physics_model.hpp"
 #include "io/hdf5.hpp"
 #include "nn/serialization.hpp"
 
@@ -55,6 +56,9 @@ void LatentMlpModel::save(h5::File& file, const std::string& prefix)
     file.set_attribute("/", prefix + "param_dim", (long long)param_dim);
     file.set_attribute("/", prefix + "loss", loss);
     file.set_attribute("/", prefix + "description", description);
+    file.set_attribute("/", prefix + "overwrite_dirichlet", (long long)overwrite_dirichlet);
+    file.set_attribute("/", prefix + "boundary_input", to_string(boundary.kind()));
+    if (boundary.kind() != BoundaryInputKind::Velocity) file.write(prefix + "boundary_rest_targets", boundary.rest_targets());
 }
 
 LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& prefix)
@@ -69,8 +73,22 @@ LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& pre
     m.param_dim = Index(file.attribute_int("/", prefix + "param_dim"));
     m.loss = file.attribute_string("/", prefix + "loss");
     m.description = file.attribute_string("/", prefix + "description");
+    // Absent in files written before the option: the decoded Dirichlet vertices were kept.
+    const std::string overwrite = prefix + "overwrite_dirichlet";
+    m.overwrite_dirichlet = file.has_attribute("/", overwrite) && file.attribute_int("/", overwrite) != 0;
+    const std::string input = prefix + "boundary_input";
+    if (file.has_attribute("/", input)) {
+        BoundaryInputKind kind;
+        try {
+            kind = boundary_input_from_string(file.attribute_string("/", input));
+        } catch (const ConfigError& e) {
+            throw IoError("'" + file.path() + "', '" + input + "': " + e.what());
+        }
+        if (kind != BoundaryInputKind::Velocity)
+            m.boundary = BoundaryInput(kind, file.read_vector(prefix + "boundary_rest_targets"));
+    }
     if (m.network.in_features() != m.input_dim() || m.network.out_features() != m.latent_dim ||
-        m.output_scale.size() != m.latent_dim) {
+        m.output_scale.size() != m.latent_dim || m.boundary.size(0) > m.param_dim) {
         throw IoError("'" + file.path() + "': integrator network shapes disagree with its latent/parameter sizes");
     }
     if (!m.output_scale.allFinite())
@@ -98,9 +116,16 @@ void LatentMlpIntegrator::reset(const VectorXd& x_prev2, const BoundaryState& bc
 {
     std::tie(m_z2, m_z1) = m_autoencoder->encode_pair(x_prev2, x_prev);
     m_z = m_z1;
-    m_p2 = bc_prev2.params;
-    m_p1 = bc_prev.params;
+    m_p2 = boundary_params(bc_prev2);
+    m_p1 = boundary_params(bc_prev);
     m_x = x_prev;
+}
+
+const VectorXd& LatentMlpIntegrator::boundary_params(const BoundaryState& bc)
+{
+    if (m_model.boundary.kind() == BoundaryInputKind::Velocity) return bc.params;
+    m_p = m_model.boundary.of_frame(bc.params, bc.targets);
+    return m_p;
 }
 
 void LatentMlpIntegrator::integrate_only(const BoundaryState& bc)
@@ -108,7 +133,7 @@ void LatentMlpIntegrator::integrate_only(const BoundaryState& bc)
     const Index L = m_model.latent_dim, P = m_model.param_dim;
     m_input.segment(0, L) = m_z1.cast<float>();
     m_input.segment(L, L) = m_z2.cast<float>();
-    m_input.segment(2 * L, P) = bc.params.cast<float>();
+    m_input.segment(2 * L, P) = boundary_params(bc).cast<float>();
     m_input.segment(2 * L + P, P) = m_p1.cast<float>();
     m_input.segment(2 * L + 2 * P, P) = m_p2.cast<float>();
     const auto out = m_integrator_net.evaluate(m_input);
@@ -120,6 +145,7 @@ void LatentMlpIntegrator::decode_only(const BoundaryState& bc)
     m_zf = m_z.cast<float>();  // preallocated: no allocation per frame
     const auto features = m_decoder_net.evaluate(m_zf);
     m_autoencoder->encoding().to_positions_into(features, bc.targets, m_x);
+    if (m_model.overwrite_dirichlet) overwrite_dirichlet(m_autoencoder->encoding().bc_indices(), bc.targets, m_x);
 }
 
 StepTiming LatentMlpIntegrator::step(const BoundaryState& bc)
@@ -134,7 +160,7 @@ StepTiming LatentMlpIntegrator::step(const BoundaryState& bc)
     m_z2.swap(m_z1);
     m_z1 = m_z;
     m_p2.swap(m_p1);
-    m_p1 = bc.params;
+    m_p1 = m_model.boundary.kind() == BoundaryInputKind::Velocity ? bc.params : m_p;  // integrate_only's p_t
     return timing;
 }
 

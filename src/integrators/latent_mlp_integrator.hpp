@@ -9,12 +9,15 @@
 // as the paper's, with a well-scaled output at initialisation.
 //
 // Inference runs the integrator and the decoder through the float
-// InferenceNetwork (BatchNorm folded, no allocation per step).
+// InferenceNetwork (BatchNorm folded, no allocation per step). A model trained with
+// overwrite_dirichlet reports positions whose Dirichlet vertices are the frame's targets;
+// one whose p_t holds the boundary pose computes it each step (a 3×3 SVD, allocating).
 #include <memory>
 
 #include "integrators/integrator.hpp"
 #include "io/hdf5.hpp"
 #include "latent/autoencoder.hpp"
+#include "latent/boundary_input.hpp"
 #include "nn/inference_network.hpp"
 #include "nn/mlp_spec.hpp"
 #include "nn/standardizer.hpp"
@@ -30,6 +33,10 @@ struct LatentMlpModel {
     VectorXd output_scale;     ///< s (latent)
     std::string loss;          ///< how it was trained: "self_supervised" or "supervised_l2"
     std::string description;   ///< e.g. "noise on, balancing on"
+    /// Decoded Dirichlet vertices replaced by the frame's targets (trained so; issue 14).
+    bool overwrite_dirichlet = false;
+    /// What p_t holds (param_dim numbers): the scene's parameters, with the boundary pose or not.
+    BoundaryInput boundary;
 
     Index input_dim() const { return 2 * latent_dim + 3 * param_dim; }
     /// Batched forward in double (training), columns are samples.
@@ -68,13 +75,16 @@ public:
     void decode_only(const BoundaryState& bc);
 
 private:
+    /// p_t of the frame: bc.params, or (boundary pose) those with the pose, in m_p.
+    const VectorXd& boundary_params(const BoundaryState& bc);
+
     std::string m_name;
     std::shared_ptr<Autoencoder> m_autoencoder;
     LatentMlpModel m_model;
     nn::InferenceNetwork m_integrator_net;  ///< standardiser folded in
     nn::InferenceNetwork m_decoder_net;
     Eigen::VectorXf m_input, m_scale, m_z1f, m_zf;
-    VectorXd m_z, m_z1, m_z2, m_p1, m_p2, m_x;
+    VectorXd m_z, m_z1, m_z2, m_p, m_p1, m_p2, m_x;
     Eigen::VectorXf m_features;
 };
 

@@ -1,6 +1,7 @@
 #include "integrators/trainer.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <filesystem>
 #include <numeric>
 #include <sstream>
@@ -29,14 +30,52 @@ IntegratorLoss integrator_loss_from_string(const std::string& name)
     throw ConfigError("unknown integrator loss '" + name + "' (expected self_supervised or supervised_l2)");
 }
 
+std::string to_string(BalancingVelocity velocity)
+{
+    return velocity == BalancingVelocity::MeanVelocity ? "mean_velocity" : "mean_speed";
+}
+
+BalancingVelocity balancing_velocity_from_string(const std::string& name)
+{
+    if (name == "mean_velocity") return BalancingVelocity::MeanVelocity;
+    if (name == "mean_speed") return BalancingVelocity::MeanSpeed;
+    throw ConfigError("unknown balancing velocity '" + name + "' (expected mean_velocity or mean_speed)");
+}
+
+VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                          double dt, BalancingVelocity velocity)
+{
+    assert(X_prev.rows() == X_prev2.rows() && X_prev.cols() == X_prev2.cols() && X_prev.rows() % 3 == 0);
+    VectorXd speeds(X_prev.cols());
+    for (Index i = 0; i < X_prev.cols(); ++i) {
+        const VectorXd d = X_prev.col(i) - X_prev2.col(i);  // N × 3 as rows: displacements over h
+        speeds[i] = velocity == BalancingVelocity::MeanVelocity ? (as_rows(d).colwise().mean() / dt).norm()
+                                                                : as_rows(d).rowwise().norm().mean() / dt;
+    }
+    return speeds;
+}
+
+std::string IntegratorTrainOptions::balancing_text() const
+{
+    if (!data_balancing) return "balancing off";
+    return balancing_velocity == BalancingVelocity::MeanSpeed ? "balancing on (mean speed)" : "balancing on";
+}
+
+std::string IntegratorTrainOptions::representation_text() const
+{
+    std::string s = overwrite_dirichlet ? ", Dirichlet overwritten" : "";
+    if (boundary_input == BoundaryInputKind::Pose) s += ", boundary pose in p";
+    return s;
+}
+
 std::string IntegratorTrainOptions::describe() const
 {
     std::ostringstream s;
     s << to_string(loss) << ", hidden [";
     for (size_t i = 0; i < hidden.size(); ++i) s << (i ? "," : "") << hidden[i];
     s << "], noise " << (training_noise ? "on" : "off");
-    if (loss == IntegratorLoss::SelfSupervised) s << ", balancing " << (data_balancing ? "on" : "off");
-    s << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
+    if (loss == IntegratorLoss::SelfSupervised) s << ", " << balancing_text();
+    s << representation_text() << ", lr " << learning_rate << ", batch " << batch_size << ", seed " << seed;
     return s.str();
 }
 
@@ -53,8 +92,14 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     if (self_supervised) {
         s << ";balancing=" << (o.data_balancing ? "on" : "off");
         if (o.data_balancing) s << ";balancing_floor=" << nn::exact_text(o.balancing_floor);
+        // Only when not the default, so fits made before the option keep their fingerprints.
+        if (o.data_balancing && o.balancing_velocity != BalancingVelocity::MeanVelocity)
+            s << ";balancing_velocity=" << to_string(o.balancing_velocity);
         s << ";penalty_weight=" << nn::exact_text(m_potential.penalty_weight());
     }
+    // Representation switches (issue 14), only when on: the fingerprints of earlier fits stay.
+    if (o.overwrite_dirichlet) s << ";overwrite_dirichlet=on";
+    if (o.boundary_input != BoundaryInputKind::Velocity) s << ";boundary_input=" << to_string(o.boundary_input);
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
     // Trainer generation 2 (2026-11-30): every sample every epoch, the compiled frozen
     // decoder. Runs of generation 1 (the last partial batch dropped) are not resumed.
@@ -62,15 +107,16 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     return s.str();
 }
 
-TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
+TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data, const BoundaryInput& boundary)
 {
     Index total = 0;
     for (const auto& s : data.sequences) total += std::max<Index>(s.train_frames - 2, 0);
     if (total == 0) throw Error("dataset has no training samples (every sequence needs train_frames ≥ 3)");
     const Index L = ae.latent_dim();
-    const Index P = data.sequences.front().bc_params.cols();
+    const Index P = boundary.size(data.sequences.front().bc_params.cols());
     const Index B3 = data.sequences.front().bc_positions.cols();
     TrainingSamples out;
+    out.boundary_input = boundary.kind();
     out.z_prev.resize(L, total);
     out.z_prev2.resize(L, total);
     out.z_target.resize(L, total);
@@ -88,9 +134,12 @@ TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data)
             out.z_prev.col(k) = Z.col(t - 1);
             out.z_prev2.col(k) = Z.col(t - 2);
             out.z_target.col(k) = Z.col(t);
-            out.p.col(k) = s.bc_params.row(t).transpose();
-            out.p_prev.col(k) = s.bc_params.row(t - 1).transpose();
-            out.p_prev2.col(k) = s.bc_params.row(t - 2).transpose();
+            auto p_of = [&](Index frame) {
+                return boundary.of_frame(s.bc_params.row(frame).transpose(), s.bc_positions.row(frame).transpose());
+            };
+            out.p.col(k) = p_of(t);
+            out.p_prev.col(k) = p_of(t - 1);
+            out.p_prev2.col(k) = p_of(t - 2);
             out.targets.col(k) = s.bc_positions.row(t).transpose();
             out.targets_prev.col(k) = s.bc_positions.row(t - 1).transpose();
             out.targets_prev2.col(k) = s.bc_positions.row(t - 2).transpose();
@@ -104,7 +153,7 @@ IntegratorTrainer::IntegratorTrainer(const PhysicsModel& model, Autoencoder& aut
     : m_model(model),
       m_autoencoder(autoencoder),
       m_options(std::move(options)),
-      m_potential(model, autoencoder, m_options.penalty_weight)
+      m_potential(model, autoencoder, m_options.penalty_weight, m_options.overwrite_dirichlet)
 {
 }
 
@@ -169,15 +218,7 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
     const MatrixXd X2 = decoded_inputs(batch, 2);
     LatentEnergyOptions options;
     options.gradient = with_gradient;
-    options.weights = VectorXd::Ones(B);
-    if (m_options.data_balancing) {
-        const double dt = m_model.dt();
-        for (Index i = 0; i < B; ++i) {
-            const VectorXd x1 = X1.col(i), x2 = X2.col(i);
-            const Vector3d v = (as_rows(x1) - as_rows(x2)).colwise().mean().transpose() / dt;
-            options.weights[i] = 1.0 / std::max(v.norm(), m_velocity_floor);
-        }
-    }
+    options.weights = m_options.data_balancing ? balancing_weights(X1, X2) : VectorXd::Ones(B);
     options.normalization = double(B);
     const LatentEnergies e = m_potential.evaluate(Zt, batch.targets, X1, X2, options);
     if (with_gradient) model.backward(e.grad_z);
@@ -218,14 +259,14 @@ double IntegratorTrainer::loss(LatentMlpModel& model, const IntegratorBatch& bat
 double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 {
     if (m_decoded_prev.cols() != samples.size()) cache_decoded_inputs(samples);
-    const MatrixXd& X1 = m_decoded_prev;
-    const MatrixXd& X2 = m_decoded_prev2;
-    double sum = 0.0;
-    for (Index i = 0; i < X1.cols(); ++i) {
-        const VectorXd d = X1.col(i) - X2.col(i);
-        sum += (as_rows(d).colwise().mean() / m_model.dt()).norm();
-    }
-    return sum / double(X1.cols());
+    return balancing_speeds(m_decoded_prev, m_decoded_prev2, m_model.dt(), m_options.balancing_velocity).mean();
+}
+
+VectorXd IntegratorTrainer::balancing_weights(const Eigen::Ref<const MatrixXd>& X_prev,
+                                             const Eigen::Ref<const MatrixXd>& X_prev2) const
+{
+    const VectorXd speeds = balancing_speeds(X_prev, X_prev2, m_model.dt(), m_options.balancing_velocity);
+    return speeds.unaryExpr([&](double v) { return 1.0 / std::max(v, m_velocity_floor); });
 }
 
 namespace {
@@ -289,6 +330,13 @@ void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& sa
     }
     model.loss = to_string(m_options.loss);
     model.description = m_options.describe();
+    model.overwrite_dirichlet = m_options.overwrite_dirichlet;
+    model.boundary = boundary_input();
+    if (samples.boundary_input != m_options.boundary_input || samples.p.rows() != model.param_dim)
+        throw Error("integrator training: samples with " + std::to_string(samples.p.rows()) + " boundary parameters (" +
+                    to_string(samples.boundary_input) + ") for a network taking " + std::to_string(model.param_dim) +
+                    " (" + to_string(m_options.boundary_input) +
+                    "): make the samples with the trainer's boundary_input()");
 }
 
 nn::TrainingLoopOptions IntegratorTrainer::loop_options() const

@@ -10,13 +10,23 @@
 //                    decoder per sample; energies are evaluated in parallel over the batch
 //                    (latent/latent_potential.hpp).
 //   supervised_l2    L_i = ||z_t − z_t^gt||² (the baseline; same network).
-// Data balancing: L_i / max(|v_{t−1}|, v_floor), v_{t−1} = (1/N) Σ_j (x_{t−1}^j − x_{t−2}^j)/h
-//   of the decoded inputs (paper eq. 6); v_floor = balancing_floor × the mean |v| of the
-//   training samples, because the formula divides by zero for a system at rest (the first
-//   frames of every sequence, a cantilever at steady state).
+// Data balancing: L_i / max(|v_{t−1}|, v_floor) (paper eq. 6), with |v_{t−1}| of the decoded
+//   inputs v_j = (x_{t−1}^j − x_{t−2}^j)/h, j over the N vertices, either
+//     mean_velocity  |(1/N) Σ_j v_j|   (the default: eq. 6 read literally), or
+//     mean_speed     (1/N) Σ_j |v_j|   (a rotation about the Dirichlet centroid has mean
+//                    velocity ~0 and would sit at the floor; its mean speed does not);
+//   v_floor = balancing_floor × the mean |v_{t−1}| of the training samples, because the
+//   formula divides by zero for a system at rest (the first frames of every sequence, a
+//   cantilever at steady state).
 // Training noise: every batch is doubled with copies whose z_{t−1}, z_{t−2} get uniform
 //   noise U(−a, a), a = noise_fraction × the batch's per-component standard deviation;
 //   boundary parameters unchanged (paper eq. 5).
+// Dirichlet overwrite (overwrite_dirichlet): the decoded positions — the prediction and the
+//   inputs x_{t−1}, x_{t−2}, in training and in rollouts — have their Dirichlet vertices
+//   replaced by the frame's targets (LatentPotential), so the penalty is 0 and the loss has no
+//   gradient through the Dirichlet rows. Off by default (the paper decodes them and penalises).
+// Boundary input (boundary_input): p_t holds the scene's boundary velocities ("velocity", the
+//   paper's) or those and the Dirichlet targets' rigid pose ("pose"; latent/boundary_input.hpp).
 // The batch loss is the mean over its (possibly doubled) samples. Noise is an option of
 //   either loss; the method parser (methods/latent_mlp) leaves it off for supervised_l2 unless
 //   asked for, as in the paper, where the baseline differs from the method only in the loss.
@@ -37,6 +47,18 @@ enum class IntegratorLoss { SelfSupervised, SupervisedL2 };
 std::string to_string(IntegratorLoss loss);
 IntegratorLoss integrator_loss_from_string(const std::string& name);
 
+/// Which |v_{t−1}| data balancing divides by (see above).
+enum class BalancingVelocity { MeanVelocity, MeanSpeed };
+std::string to_string(BalancingVelocity velocity);
+BalancingVelocity balancing_velocity_from_string(const std::string& name);
+
+/// |v_{t−1}| of data balancing for every sample (column).
+/// @param X_prev, X_prev2  3N × S positions x_{t−1}, x_{t−2}
+/// @param dt               time step h (s)
+/// @return S speeds (m/s)
+VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                          double dt, BalancingVelocity velocity);
+
 struct IntegratorTrainOptions : nn::TrainingRunOptions {
     IntegratorLoss loss = IntegratorLoss::SelfSupervised;
     std::vector<Index> hidden{256, 256, 256, 256, 256};
@@ -46,24 +68,35 @@ struct IntegratorTrainOptions : nn::TrainingRunOptions {
     bool training_noise = true;
     double noise_fraction = 0.1;
     bool data_balancing = true;
+    BalancingVelocity balancing_velocity = BalancingVelocity::MeanVelocity;
     double balancing_floor = 0.05;
     double penalty_weight = 1e5;  ///< w_bc (cloth, solids)
+    bool overwrite_dirichlet = false;
+    BoundaryInputKind boundary_input = BoundaryInputKind::Velocity;  ///< what p_t holds
     std::uint64_t seed = 0;
     /// One line for logs and file attributes.
     std::string describe() const;
+    /// "balancing on", "balancing off" or "balancing on (mean speed)": the phrase of
+    /// describe() and of table rows.
+    std::string balancing_text() const;
+    /// The representation switches that are not the paper's, as phrases to append (e.g.
+    /// ", Dirichlet overwritten"; "" for the paper's): of describe() and of table rows.
+    std::string representation_text() const;
 };
 
 /// Training samples from the training frames of a dataset: for every sequence and
 /// t ∈ [2, train_frames): latents of frames t−1, t−2 (encoded ground truth), the
-/// boundary parameters of t, t−1, t−2, the ground-truth latent of t, and the
-/// Dirichlet targets of the three frames. Columns are samples.
+/// boundary parameters p of t, t−1, t−2 (as `boundary` makes them from the scene's
+/// parameters and targets), the ground-truth latent of t, and the Dirichlet targets of the
+/// three frames. Columns are samples.
 struct TrainingSamples {
     MatrixXd z_prev, z_prev2, z_target;          ///< latent × S
     MatrixXd p, p_prev, p_prev2;                 ///< P × S
     MatrixXd targets, targets_prev, targets_prev2;  ///< 3B × S
+    BoundaryInputKind boundary_input = BoundaryInputKind::Velocity;  ///< how p was made
     Index size() const { return z_prev.cols(); }
 };
-TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data);
+TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data, const BoundaryInput& boundary = {});
 
 /// The model's input standardiser (from the samples' inputs) and output scale s (the
 /// per-component standard deviation of z_t − z_{t−1}, 1 where it vanishes).
@@ -105,11 +138,16 @@ public:
     /// The learner train() hands to the shared loop (after prepare()); `model` and
     /// `samples` must outlive it. For nn::EpochRunner (the train_epoch benchmarks).
     std::unique_ptr<nn::Learner> learner(LatentMlpModel& model, const TrainingSamples& samples);
+    /// p_t as options.boundary_input says, its pose relative to the physics' rest.
+    BoundaryInput boundary_input() const { return BoundaryInput(m_options.boundary_input, m_model.spec()); }
     /// The velocity floor of data balancing (set by train() or set_velocity_floor()).
     double velocity_floor() const { return m_velocity_floor; }
     void set_velocity_floor(double v) { m_velocity_floor = v; }
     /// Mean |v_{t−1}| over the samples' ground-truth decoded inputs.
     double mean_input_speed(const TrainingSamples& samples);
+    /// Data balancing's per-sample weights 1 / max(|v_{t−1}|, v_floor) of decoded inputs
+    /// (3N × B each; |v_{t−1}| as options.balancing_velocity says).
+    VectorXd balancing_weights(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2) const;
 
     /// The resolved options as "key=value;..." text: every field that changes the numbers
     /// (fields that cannot matter, e.g. the noise fraction without noise, are left out;

@@ -8,8 +8,12 @@
 
 namespace lb {
 
-LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoencoder, double penalty_weight)
-    : m_model(model), m_autoencoder(autoencoder), m_penalty_weight(applied_penalty_weight(model, penalty_weight))
+LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoencoder, double penalty_weight,
+                                 bool overwrite_dirichlet)
+    : m_model(model),
+      m_autoencoder(autoencoder),
+      m_penalty_weight(applied_penalty_weight(model, penalty_weight)),
+      m_overwrite_dirichlet(overwrite_dirichlet)
 {
     const int threads = std::max(1, omp_get_max_threads());
     m_potentials.reserve(size_t(threads));
@@ -64,12 +68,15 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
     MatrixXd X;
     if (m_frozen) {
         m_frozen->forward_batch(Z, m_features, options.gradient);
-        X = m_autoencoder.encoding().to_positions(m_features, bc_targets);
+        X = positions_of(m_features, bc_targets);
     } else {
-        X = m_autoencoder.decode(Z, bc_targets);
+        X = positions_of(m_autoencoder.decode_features(Z), bc_targets);
     }
     energies_of(X, bc_targets, X_prev, X_prev2, options, check_finite, out);
     if (options.gradient) {
+        if (m_overwrite_dirichlet) {  // x_B = x*_B does not depend on z
+            for (int v : m_model.bc_indices()) out.grad_x.middleRows<3>(3 * Index(v)).setZero();
+        }
         if (m_frozen)
             m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(out.grad_x, bc_targets), out.grad_z);
         else
@@ -139,10 +146,19 @@ void LatentPotential::freeze_decoder()
 
 MatrixXd LatentPotential::decode(const MatrixXd& Z, const MatrixXd& bc_targets)
 {
-    if (!m_frozen) return m_autoencoder.decode(Z, bc_targets);
+    if (!m_frozen) return positions_of(m_autoencoder.decode_features(Z), bc_targets);
     MatrixXd features;
     m_frozen->forward_batch(Z, features, false);
-    return m_autoencoder.encoding().to_positions(features, bc_targets);
+    return positions_of(features, bc_targets);
+}
+
+MatrixXd LatentPotential::positions_of(const MatrixXd& features, const MatrixXd& bc_targets) const
+{
+    MatrixXd X = m_autoencoder.encoding().to_positions(features, bc_targets);
+    if (m_overwrite_dirichlet) {
+        for (Index i = 0; i < X.cols(); ++i) overwrite_dirichlet(m_model.bc_indices(), bc_targets.col(i), X.col(i));
+    }
+    return X;
 }
 
 } // namespace lb

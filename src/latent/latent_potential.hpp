@@ -12,6 +12,10 @@
 //
 // w_bc is applied_penalty_weight(model, penalty_weight) (sim/physics_model.hpp): the
 // penalty for cloth and solids, none for rods (their roots are decoded exactly).
+// With overwrite_dirichlet, every decoded x has its Dirichlet vertices replaced by their
+// targets x*_B (evaluate() and decode()): x_B no longer depends on z, so the penalty term is
+// 0 and J_Dᵀ∇E takes no contribution from the Dirichlet rows (their ∇_x E rows are zeroed
+// before the VJP). Rods decode their roots exactly anyway, so it changes nothing there.
 // The decoder is evaluated in eval mode and never modified. A caller that will not change
 // the decoder either (the integrator trainers) may freeze_decoder(): the decoder is then
 // compiled once (BatchNorm folded into the linear layers, nn/inference_network.hpp) and a
@@ -41,7 +45,8 @@ struct LatentEnergies {
     double objective = 0.0;  ///< Σ_i w_i E_i / n
     /// ∂objective/∂z_i = (w_i / n) J_D(z_i)ᵀ ∇_x E_i(D(z_i)), latent × B (if options.gradient).
     MatrixXd grad_z;
-    /// (w_i / n) ∇_x E_i(x_i), 3N × B (if options.gradient): what grad_z back-propagates.
+    /// (w_i / n) ∇_x E_i(x_i), 3N × B (if options.gradient): what grad_z back-propagates
+    /// (its Dirichlet rows 0 if the decoded Dirichlet vertices are overwritten).
     MatrixXd grad_x;
     MatrixXd X;  ///< D(z_i), 3N × B (if options.decoded)
 };
@@ -52,10 +57,13 @@ public:
     /// @param autoencoder     whose decoder D is used (frozen); must outlive this object
     /// @param penalty_weight  the configured w_bc (> 0); the applied one follows the
     ///                        boundary policy (applied_penalty_weight: 0 for rods)
-    LatentPotential(const PhysicsModel& model, Autoencoder& autoencoder, double penalty_weight);
+    /// @param overwrite_dirichlet  replace the decoded Dirichlet vertices by their targets
+    LatentPotential(const PhysicsModel& model, Autoencoder& autoencoder, double penalty_weight,
+                    bool overwrite_dirichlet = false);
 
     /// The w_bc applied (0 for rods: hard roots).
     double penalty_weight() const { return m_penalty_weight; }
+    bool overwrites_dirichlet() const { return m_overwrite_dirichlet; }
     const PhysicsModel& model() const { return m_model; }
     Autoencoder& autoencoder() { return m_autoencoder; }
 
@@ -91,7 +99,7 @@ public:
     void freeze_decoder();
     bool decoder_frozen() const { return m_frozen != nullptr; }
     /// D(z) for latent × B codes and 3B × B targets: the frozen copy if any, else the
-    /// autoencoder's decode().
+    /// autoencoder's decode(); Dirichlet vertices overwritten if overwrites_dirichlet().
     MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
 
     /// The incremental potentials of B given position vectors (no decoding) and, if
@@ -114,9 +122,14 @@ private:
                                     const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options,
                                     bool check_finite);
 
+    /// decode()'s positions of the features the (frozen or live) decoder gave: the
+    /// encoding's, with the Dirichlet vertices overwritten if asked for.
+    MatrixXd positions_of(const MatrixXd& features, const MatrixXd& bc_targets) const;
+
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
     double m_penalty_weight = 0.0;
+    bool m_overwrite_dirichlet = false;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
     std::vector<VectorXd> m_gradients;               ///< one x-gradient workspace per thread
     std::unique_ptr<nn::InferenceNetworkD> m_frozen;  ///< freeze_decoder()'s compiled decoder

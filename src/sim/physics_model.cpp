@@ -1,5 +1,7 @@
 #include "sim/physics_model.hpp"
 
+#include <cassert>
+
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "energy/dirichlet_penalty.hpp"
@@ -87,9 +89,14 @@ double PhysicsModel::kinetic_energy(const VectorXd& x, const VectorXd& x_prev) c
 
 void PhysicsModel::apply_bc(const MatrixX3d& targets, VectorXd& x) const
 {
-    for (size_t b = 0; b < m_spec.bc_indices.size(); ++b) {
-        x.segment<3>(3 * m_spec.bc_indices[b]) = targets.row(Index(b)).transpose();
-    }
+    overwrite_dirichlet(m_spec.bc_indices, flatten(targets), x);
+}
+
+void overwrite_dirichlet(const std::vector<int>& bc_indices, const Eigen::Ref<const VectorXd>& targets,
+                         Eigen::Ref<VectorXd> x)
+{
+    assert(targets.size() == 3 * Index(bc_indices.size()));
+    for (size_t b = 0; b < bc_indices.size(); ++b) x.segment<3>(3 * Index(bc_indices[b])) = targets.segment<3>(3 * Index(b));
 }
 
 double applied_penalty_weight(const PhysicsModel& model, double penalty_weight)

@@ -68,6 +68,13 @@ private:
     double m_force_scale = 1.0;
 };
 
+/// Overwrite the Dirichlet vertices of x with their targets.
+/// @param bc_indices  the B Dirichlet vertices
+/// @param targets     3B targets x*_B, xyz interleaved, in the order of bc_indices
+/// @param x           3N positions
+void overwrite_dirichlet(const std::vector<int>& bc_indices, const Eigen::Ref<const VectorXd>& targets,
+                         Eigen::Ref<VectorXd> x);
+
 /// The boundary policy of reduced (latent and subspace) methods, stated once: their
 /// decoders cannot pin vertices exactly in general, so cloth and solids add the Dirichlet
 /// penalty w_bc Σ_B |x_i − x*_i|²; rods decode their roots exactly (BC-relative encoding,

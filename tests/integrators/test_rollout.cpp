@@ -31,6 +31,84 @@ TEST(LatentMlpModel, NonFiniteOutputScaleIsRefused)
     }
 }
 
+// overwrite_dirichlet (issue 14), as the artefact records it: the rollout's Dirichlet
+// vertices are the frame's targets exactly; every other coordinate is what the model
+// without the switch reports, bit for bit, and that one leaves the decoded rows off target.
+TEST(LatentMlpIntegrator, OverwrittenDirichletVerticesAreTheFrameTargets)
+{
+    testing::TinyProblem p("cloth", 12);
+    const SequenceData& seq = p.data.sequences[0];
+    auto state = [&](Index t) {
+        return BoundaryState{seq.bc_params.row(t).transpose(), seq.bc_positions.row(t).transpose()};
+    };
+    const Index frames = 6;
+    auto roll = [&](bool overwrite) {
+        LatentMlpModel m = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), {8}, 4);
+        fit_input_statistics(m, p.samples);
+        m.overwrite_dirichlet = overwrite;
+        const std::string path = std::string(LB_TEST_TMP_DIR) + "/overwrite_dirichlet.h5";
+        {
+            h5::File f = h5::File::create(path);
+            m.save(f, "integrator.");
+        }
+        LatentMlpIntegrator integrator("ours", p.ae, LatentMlpModel::load(h5::File::open(path), "integrator."));
+        integrator.reset(seq.positions.row(0).transpose(), state(0), seq.positions.row(1).transpose(), state(1));
+        MatrixXd X(p.model->num_dofs(), frames);
+        for (Index t = 2; t < 2 + frames; ++t) {
+            integrator.step(state(t));
+            X.col(t - 2) = integrator.positions();
+        }
+        return X;
+    };
+    const MatrixXd on = roll(true), off = roll(false);
+    const auto& bc = p.model->bc_indices();
+    MatrixXd expected = off;
+    for (Index t = 2; t < 2 + frames; ++t) {
+        for (size_t b = 0; b < bc.size(); ++b)
+            expected.col(t - 2).segment<3>(3 * Index(bc[b])) = seq.bc_positions.block<1, 3>(t, 3 * Index(b)).transpose();
+    }
+    EXPECT_EQ(on, expected);
+    EXPECT_NE(off, expected) << "the decoded Dirichlet rows should be off target without the switch";
+}
+
+// A model trained with the boundary pose in p_t (issue 14) takes it, computed from each
+// frame's targets, in its rollouts too: the first step's increment is the network's on the
+// training sample of that frame. The artefact records the input and its rest reference.
+TEST(LatentMlpIntegrator, PoseInputIsComputedFromEachFramesTargets)
+{
+    testing::TinyProblem p("cloth", 12);
+    IntegratorTrainOptions o;
+    o.boundary_input = BoundaryInputKind::Pose;
+    IntegratorTrainer trainer(*p.model, *p.ae, o);
+    const TrainingSamples s = make_training_samples(*p.ae, p.data, trainer.boundary_input());
+    LatentMlpModel m = LatentMlpModel::create(p.ae->latent_dim(), s.p.rows(), {8}, 4);
+    trainer.prepare(m, s);
+    const std::string path = std::string(LB_TEST_TMP_DIR) + "/pose_input.h5";
+    {
+        h5::File f = h5::File::create(path);
+        m.save(f, "integrator.");
+    }
+    LatentMlpModel loaded = LatentMlpModel::load(h5::File::open(path), "integrator.");
+    EXPECT_EQ(loaded.boundary.kind(), BoundaryInputKind::Pose);
+    EXPECT_EQ(loaded.boundary.rest_targets(), m.boundary.rest_targets());
+
+    const SequenceData& seq = p.data.sequences[0];
+    auto state = [&](Index t) {
+        return BoundaryState{seq.bc_params.row(t).transpose(), seq.bc_positions.row(t).transpose()};
+    };
+    LatentMlpIntegrator integrator("ours", p.ae, std::move(loaded));
+    integrator.reset(seq.positions.row(0).transpose(), state(0), seq.positions.row(1).transpose(), state(1));
+    integrator.step(state(2));
+    MatrixXd inputs(m.input_dim(), 1);
+    inputs << s.z_prev.col(0), s.z_prev2.col(0), s.p.col(0), s.p_prev.col(0), s.p_prev2.col(0);
+    const VectorXd expected = m.forward(inputs, s.z_prev.col(0), false);
+    // The network's output (the increment over s), float inference against double training.
+    const VectorXd got = (integrator.latent() - s.z_prev.col(0)).cwiseQuotient(m.output_scale);
+    const VectorXd want = (expected - s.z_prev.col(0)).cwiseQuotient(m.output_scale);
+    EXPECT_LT((got - want).cwiseAbs().maxCoeff(), 1e-3 * (1.0 + want.cwiseAbs().maxCoeff()))
+        << got.transpose() << " vs " << want.transpose();
+}
+
 TEST(Rollout, FullSpaceReproducesGroundTruth)
 {
     testing::TinyProblem p("cloth", 40);

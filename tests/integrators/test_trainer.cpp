@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <numeric>
 
+#include "core/error.hpp"
 #include "integrators/integrator_fixture.hpp"
 #include "support/finite_difference.hpp"
 
@@ -27,15 +28,22 @@ void prepare(LatentMlpModel& net, const TrainingSamples& s)
     net.output_scale = VectorXd::Constant(net.latent_dim, 0.1);
 }
 
-class LossGradient : public ::testing::TestWithParam<IntegratorLoss> { };
+struct LossCase {
+    IntegratorLoss loss;
+    bool overwrite_dirichlet;
+};
+
+class LossGradient : public ::testing::TestWithParam<LossCase> { };
 
 // ∂L/∂θ of the integrator weights (through the decoder, the energy and the
-// balancing weights) against central finite differences of the loss.
+// balancing weights) against central finite differences of the loss; also with the
+// decoded Dirichlet vertices overwritten (the cantilever has a penalty, so it matters).
 TEST_P(LossGradient, MatchesFiniteDifferences)
 {
     TinyProblem p;
     IntegratorTrainOptions o;
-    o.loss = GetParam();
+    o.loss = GetParam().loss;
+    o.overwrite_dirichlet = GetParam().overwrite_dirichlet;
     o.hidden = {8, 8};
     o.training_noise = true;
     o.data_balancing = true;
@@ -77,7 +85,42 @@ TEST_P(LossGradient, MatchesFiniteDifferences)
 }
 
 INSTANTIATE_TEST_SUITE_P(Losses, LossGradient,
-                         ::testing::Values(IntegratorLoss::SelfSupervised, IntegratorLoss::SupervisedL2));
+                         ::testing::Values(LossCase{IntegratorLoss::SelfSupervised, false},
+                                           LossCase{IntegratorLoss::SupervisedL2, false},
+                                           LossCase{IntegratorLoss::SelfSupervised, true}),
+                         [](const auto& info) {
+                             return to_string(info.param.loss) +
+                                    (info.param.overwrite_dirichlet ? "_overwrite_dirichlet" : "");
+                         });
+
+// The representation switches of issue 14 enter the fingerprint only when not the paper's,
+// so checkpoints and fits made before them keep theirs; the model records the overwrite.
+TEST(ResolvedOptions, RepresentationSwitchesOnlyWhenNotTheDefault)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    const std::string paper = IntegratorTrainer(*p.model, *p.ae, o).resolved_options(p.samples.size());
+    EXPECT_EQ(paper.find("balancing_velocity"), std::string::npos) << paper;
+    EXPECT_EQ(paper.find("overwrite_dirichlet"), std::string::npos) << paper;
+    EXPECT_EQ(paper.find("boundary_input"), std::string::npos) << paper;
+    o.balancing_velocity = BalancingVelocity::MeanSpeed;
+    o.overwrite_dirichlet = true;
+    o.boundary_input = BoundaryInputKind::Pose;
+    IntegratorTrainer changed(*p.model, *p.ae, o);
+    const std::string text = changed.resolved_options(p.samples.size());
+    EXPECT_NE(text.find(";balancing_velocity=mean_speed"), std::string::npos) << text;
+    EXPECT_NE(text.find(";overwrite_dirichlet=on"), std::string::npos) << text;
+    EXPECT_NE(text.find(";boundary_input=pose"), std::string::npos) << text;
+    EXPECT_EQ(o.describe().find("self_supervised, hidden [256,256,256,256,256], noise on, balancing on (mean speed), "
+                                "Dirichlet overwritten, boundary pose in p, lr"),
+              0u)
+        << o.describe();
+
+    const TrainingSamples samples = make_training_samples(*p.ae, p.data, changed.boundary_input());
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), samples.p.rows(), {8}, 3);
+    changed.prepare(net, samples);
+    EXPECT_TRUE(net.overwrite_dirichlet);
+}
 
 TEST(TrainingNoise, DoublesTheBatchWithBoundedLatentNoise)
 {
@@ -138,6 +181,89 @@ TEST(DataBalancing, DividesEachSampleByItsMeanVelocity)
         v /= double(p.model->num_vertices()) * p.model->dt();
         EXPECT_NEAR(balanced, plain / std::max(v.norm(), floor), 1e-9 * std::abs(plain / std::max(v.norm(), floor)));
     }
+}
+
+// Rotation about the centroid: the mean vertex velocity vanishes (eq. 6 read literally puts
+// every such sample at the floor), the mean vertex speed does not. A translation has equal
+// speeds everywhere, so both give the same weight.
+TEST(DataBalancing, MeanSpeedWeighsRotationsThatTheMeanVelocityPutsAtTheFloor)
+{
+    TinyProblem p;
+    const double dt = p.model->dt();
+    const VectorXd rest = flatten(p.data.physics.mesh.rest_positions);
+    const Vector3d centroid = as_rows(rest).colwise().mean().transpose();
+    const double floor = 1e-3;
+    MatrixXd rotated(rest.size(), 3), translated(rest.size(), 3), before(rest.size(), 3);
+    for (Index i = 0; i < 3; ++i) {
+        before.col(i) = rest;
+        // 0.5, 1, 1.5 rad/s about three axes through the centroid.
+        const Matrix3d R = Eigen::AngleAxisd(0.5 * double(i + 1) * dt, Vector3d::Unit(i)).toRotationMatrix();
+        VectorXd x = rest;
+        for (Index j = 0; j < rest.size() / 3; ++j) x.segment<3>(3 * j) = R * (rest.segment<3>(3 * j) - centroid) + centroid;
+        rotated.col(i) = x;
+        translated.col(i) = rest + (VectorXd::LinSpaced(3, 0.1, 0.3).replicate(rest.size() / 3, 1) * double(i + 1) * dt);
+    }
+    IntegratorTrainOptions o;
+    o.balancing_velocity = BalancingVelocity::MeanVelocity;
+    IntegratorTrainer velocity(*p.model, *p.ae, o);
+    o.balancing_velocity = BalancingVelocity::MeanSpeed;
+    IntegratorTrainer speed(*p.model, *p.ae, o);
+    velocity.set_velocity_floor(floor);
+    speed.set_velocity_floor(floor);
+
+    const VectorXd at_floor = velocity.balancing_weights(rotated, before);
+    const VectorXd by_speed = speed.balancing_weights(rotated, before);
+    for (Index i = 0; i < 3; ++i) {
+        EXPECT_LT(balancing_speeds(rotated.col(i), before.col(i), dt, BalancingVelocity::MeanVelocity)[0], 1e-12);
+        EXPECT_EQ(at_floor[i], 1.0 / floor) << "rotation " << i;
+        // Independently: the mean over vertices of |ω × r| = mean |x_{t−1} − x_{t−2}| / h.
+        double mean_speed = 0.0;
+        for (Index j = 0; j < rest.size() / 3; ++j)
+            mean_speed += (rotated.col(i).segment<3>(3 * j) - rest.segment<3>(3 * j)).norm() / dt;
+        mean_speed /= double(rest.size() / 3);
+        ASSERT_GT(mean_speed, 10.0 * floor);
+        EXPECT_NEAR(by_speed[i], 1.0 / mean_speed, 1e-12 / mean_speed) << "rotation " << i;
+    }
+    const VectorXd t_velocity = velocity.balancing_weights(translated, before);
+    const VectorXd t_speed = speed.balancing_weights(translated, before);
+    for (Index i = 0; i < 3; ++i) {
+        const double expected = 1.0 / (VectorXd::LinSpaced(3, 0.1, 0.3).norm() * double(i + 1));
+        EXPECT_NEAR(t_velocity[i], expected, 1e-12 * expected) << "translation " << i;
+        EXPECT_NEAR(t_speed[i], expected, 1e-12 * expected) << "translation " << i;
+    }
+}
+
+// boundary_input = "pose": p = [the scene's parameters, the pose of the frame's Dirichlet
+// targets] for each of the three frames; everything else as with the velocities alone; the
+// trainer records the input in the model and refuses samples made the other way.
+TEST(PoseBoundaryInput, SamplesAppendThePoseOfEachFramesTargets)
+{
+    TinyProblem p;
+    IntegratorTrainOptions o;
+    o.boundary_input = BoundaryInputKind::Pose;
+    IntegratorTrainer trainer(*p.model, *p.ae, o);
+    const BoundaryInput pose = trainer.boundary_input();
+    const TrainingSamples s = make_training_samples(*p.ae, p.data, pose);
+    const Index P = p.samples.p.rows();
+    ASSERT_EQ(s.p.rows(), P + BoundaryInput::kPoseSize);
+    EXPECT_EQ(s.boundary_input, BoundaryInputKind::Pose);
+    EXPECT_EQ(s.p.topRows(P), p.samples.p);
+    EXPECT_EQ(s.p_prev.topRows(P), p.samples.p_prev);
+    EXPECT_EQ(s.p_prev2.topRows(P), p.samples.p_prev2);
+    EXPECT_EQ(s.z_prev, p.samples.z_prev);
+    EXPECT_EQ(s.targets, p.samples.targets);
+    for (Index i = 0; i < s.size(); ++i) {
+        EXPECT_EQ(s.p.col(i).tail(BoundaryInput::kPoseSize), pose.pose(s.targets.col(i)));
+        EXPECT_EQ(s.p_prev.col(i).tail(BoundaryInput::kPoseSize), pose.pose(s.targets_prev.col(i)));
+        EXPECT_EQ(s.p_prev2.col(i).tail(BoundaryInput::kPoseSize), pose.pose(s.targets_prev2.col(i)));
+    }
+
+    LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), s.p.rows(), {8}, 3);
+    trainer.prepare(net, s);
+    EXPECT_EQ(net.boundary.kind(), BoundaryInputKind::Pose);
+    EXPECT_EQ(net.boundary.rest_targets(), pose.rest_targets());
+    LatentMlpModel velocity_net = LatentMlpModel::create(p.ae->latent_dim(), P, {8}, 3);
+    EXPECT_THROW(trainer.prepare(velocity_net, p.samples), Error);
 }
 
 TEST(SelfSupervisedLoss, DecreasesOnATinyScene)

@@ -80,11 +80,9 @@ TEST_P(LatentPotentialPhysics, BoundaryPolicyGivesThePenaltyWeight)
     EXPECT_EQ(potential.penalty_weight(), expected);
 }
 
-// grad_z = J_D(z)ᵀ ∇_x E(D(z)) against central differences of E(D(z)).
-TEST_P(LatentPotentialPhysics, GradientMatchesFiniteDifferences)
+/// grad_z = J_D(z)ᵀ ∇_x E(D(z)) against central differences of E(D(z)), every sample of p.
+void expect_gradient_matches_finite_differences(const Problem& p, LatentPotential& potential, const std::string& what)
 {
-    Problem p(GetParam().physics(), 3, 2);
-    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
     for (Index s = 0; s < p.Z.cols(); ++s) {
         const VectorXd t = p.T.col(s), x1 = p.X_prev.col(s), x2 = p.X_prev2.col(s);
         VectorXd grad;
@@ -97,8 +95,61 @@ TEST_P(LatentPotentialPhysics, GradientMatchesFiniteDifferences)
         fd.scale = 1e-6 * grad.cwiseAbs().maxCoeff();
         EXPECT_TRUE(lb::testing::check_gradient([&](const VectorXd& z) { return potential.value(z, t, x1, x2); },
                                                 [&](const VectorXd&) { return grad; }, p.Z.col(s), fd,
-                                                std::string(GetParam().name) + " sample " + std::to_string(s)));
+                                                what + " sample " + std::to_string(s)));
     }
+}
+
+TEST_P(LatentPotentialPhysics, GradientMatchesFiniteDifferences)
+{
+    Problem p(GetParam().physics(), 3, 2);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    expect_gradient_matches_finite_differences(p, potential, GetParam().name);
+}
+
+// overwrite_dirichlet (issue 14): the decoded Dirichlet rows are the targets exactly (in
+// evaluate() and decode()), everything else is the plain decode bit for bit, the penalty is
+// 0, no gradient flows from the Dirichlet rows, and grad_z is still E's derivative.
+TEST_P(LatentPotentialPhysics, OverwrittenDirichletRowsAreTheTargetsAndTheGradientHolds)
+{
+    const Index B = 3;
+    Problem p(GetParam().physics(), B, 7);
+    LatentPotential overwriting(*p.model, *p.ae, kPenaltyWeight, true);
+    EXPECT_TRUE(overwriting.overwrites_dirichlet());
+    expect_gradient_matches_finite_differences(p, overwriting, std::string(GetParam().name) + " overwritten");
+
+    LatentEnergyOptions options;
+    options.gradient = true;
+    options.decoded = true;
+    const LatentEnergies e = overwriting.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    MatrixXd expected = p.ae->decode(p.Z, p.T);
+    const auto& bc = p.model->bc_indices();
+    for (Index i = 0; i < B; ++i) {
+        for (size_t b = 0; b < bc.size(); ++b)
+            expected.col(i).segment<3>(3 * Index(bc[b])) = p.T.col(i).segment<3>(3 * Index(b));
+    }
+    EXPECT_EQ(e.X, expected);
+    EXPECT_EQ(overwriting.decode(p.Z, p.T), expected);
+    if (GetParam().penalty) {
+        EXPECT_NE(p.ae->decode(p.Z, p.T), expected) << "the test needs decoded rows off target";
+    }
+    for (int v : bc) EXPECT_EQ(e.grad_x.middleRows<3>(3 * Index(v)).cwiseAbs().maxCoeff(), 0.0) << "vertex " << v;
+
+    // The energies are those of the overwritten positions, where the penalty vanishes.
+    IncrementalPotential no_penalty(*p.model, 0.0);
+    for (Index i = 0; i < B; ++i) {
+        no_penalty.set_previous(p.X_prev.col(i), p.X_prev2.col(i));
+        EXPECT_NEAR(e.energies[i], no_penalty.value(expected.col(i)), 1e-12 * std::abs(e.energies[i]));
+    }
+
+    // Off (the default): the plain decode, bit for bit.
+    LatentPotential plain(*p.model, *p.ae, kPenaltyWeight);
+    LatentPotential off(*p.model, *p.ae, kPenaltyWeight, false);
+    const LatentEnergies a = plain.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    const LatentEnergies b = off.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    EXPECT_EQ(a.X, p.ae->decode(p.Z, p.T));
+    EXPECT_EQ(a.X, b.X);
+    EXPECT_EQ(a.energies, b.energies);
+    EXPECT_EQ(a.grad_z, b.grad_z);
 }
 
 // The batch: its energies are those of decode + IncrementalPotential, its gradient the

@@ -1,5 +1,6 @@
 #include "methods/latent_mlp/latent_mlp_method.hpp"
 
+#include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/parse.hpp"
 #include "integrators/trainer.hpp"
@@ -9,6 +10,19 @@
 namespace lb {
 
 namespace {
+
+/// An enumerated key: `parse` (an `<enum>_from_string`) reads its text, and its ConfigError
+/// (naming the accepted values) is reported against the key.
+template <typename Enum>
+Enum get_choice(ConfigTable& t, const std::string& key, Enum fallback, Enum (*parse)(const std::string&))
+{
+    const std::string text = t.get_string(key, to_string(fallback));
+    try {
+        return parse(text);
+    } catch (const ConfigError& e) {
+        t.fail(key, e.what());
+    }
+}
 
 /// The training keys, valid in [training], [scenes.training] and the entry itself.
 void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given)
@@ -23,7 +37,10 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
     o.max_seconds = t.get_double("max_seconds", o.max_seconds);
     o.noise_fraction = t.get_double("noise_fraction", o.noise_fraction);
     o.balancing_floor = t.get_double("balancing_floor", o.balancing_floor);
+    o.balancing_velocity = get_choice(t, "balancing_velocity", o.balancing_velocity, balancing_velocity_from_string);
     o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
+    o.overwrite_dirichlet = t.get_bool("overwrite_dirichlet", o.overwrite_dirichlet);
+    o.boundary_input = get_choice(t, "boundary_input", o.boundary_input, boundary_input_from_string);
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (o.epochs < 1) t.fail("epochs", "must be at least 1");
     if (o.batch_size < 1) t.fail("batch", "must be at least 1");
@@ -68,8 +85,13 @@ public:
         if (o.loss == IntegratorLoss::SelfSupervised) {  // the supervised loss has no balancing
             t.insert_or_assign("balancing", o.data_balancing);
             t.insert_or_assign("balancing_floor", o.balancing_floor);
+            // Only when not the default: the text is the cache key of fits made before the option.
+            if (o.data_balancing && o.balancing_velocity != BalancingVelocity::MeanVelocity)
+                t.insert_or_assign("balancing_velocity", to_string(o.balancing_velocity));
         }
         t.insert_or_assign("penalty_weight", o.penalty_weight);
+        if (o.overwrite_dirichlet) t.insert_or_assign("overwrite_dirichlet", true);  // only when on: earlier keys stay
+        if (o.boundary_input != BoundaryInputKind::Velocity) t.insert_or_assign("boundary_input", to_string(o.boundary_input));
         t.insert_or_assign("seed", (long long)o.seed);
         t.insert_or_assign("max_seconds", o.max_seconds);
         return to_toml_string(t);
@@ -78,9 +100,10 @@ public:
     std::string summary() const override
     {
         if (m_options.loss == IntegratorLoss::SupervisedL2)
-            return m_options.training_noise ? "supervised_l2 + noise" : "supervised_l2";
-        return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", balancing " +
-               (m_options.data_balancing ? "on" : "off");
+            return (m_options.training_noise ? "supervised_l2 + noise" : "supervised_l2") +
+                   m_options.representation_text();
+        return to_string(m_options.loss) + ", noise " + (m_options.training_noise ? "on" : "off") + ", " +
+               m_options.balancing_text() + m_options.representation_text();
     }
     std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
@@ -98,10 +121,10 @@ public:
         o.checkpoint_path = in.checkpoint_path;
         o.resume = in.resume;
         Autoencoder& ae = *in.autoencoder;
-        const TrainingSamples samples = make_training_samples(ae, *in.data);
+        IntegratorTrainer trainer(*in.model, ae, o);
+        const TrainingSamples samples = make_training_samples(ae, *in.data, trainer.boundary_input());
         log_info("training latent_mlp (%s) on %ld samples", o.describe().c_str(), long(samples.size()));
         LatentMlpModel net = LatentMlpModel::create(ae.latent_dim(), samples.p.rows(), o.hidden, o.seed);
-        IntegratorTrainer trainer(*in.model, ae, o);
         const IntegratorTrainSummary s = trainer.train(net, samples);
         net.save(out, "integrator.");
         out.set_attribute("/", "epochs_run", (long long)s.epochs_run);

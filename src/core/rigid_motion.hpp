@@ -1,0 +1,22 @@
+#pragma once
+// The least-squares rigid motion between two point sets (Kabsch 1976): the boundary's rigid
+// motion of the free-DOF kinetic energy (eval/metrics.hpp) and the boundary pose an
+// integrator may take as input (latent/boundary_input.hpp).
+#include "core/types.hpp"
+
+namespace lb {
+
+/// A rigid motion p ↦ R (p − from_centroid) + to_centroid.
+struct RigidMotion {
+    Matrix3d rotation = Matrix3d::Identity();
+    Vector3d from_centroid = Vector3d::Zero();
+    Vector3d to_centroid = Vector3d::Zero();
+    Vector3d apply(const Vector3d& p) const { return rotation * (p - from_centroid) + to_centroid; }
+};
+
+/// Least-squares rigid motion taking the points `from` to `to` (each K×3, Kabsch with
+/// reflection correction). Collinear or single points (rotation undetermined): the
+/// translation of the centroid only. No points: the identity.
+RigidMotion fit_rigid_motion(const MatrixX3d& from, const MatrixX3d& to);
+
+} // namespace lb

@@ -1,0 +1,65 @@
+#include "latent/boundary_input.hpp"
+
+#include "core/error.hpp"
+#include "core/rigid_motion.hpp"
+
+namespace lb {
+
+std::string to_string(BoundaryInputKind kind)
+{
+    return kind == BoundaryInputKind::Velocity ? "velocity" : "pose";
+}
+
+BoundaryInputKind boundary_input_from_string(const std::string& name)
+{
+    if (name == "velocity") return BoundaryInputKind::Velocity;
+    if (name == "pose") return BoundaryInputKind::Pose;
+    throw ConfigError("unknown boundary input '" + name + "' (expected velocity or pose)");
+}
+
+BoundaryInput::BoundaryInput(BoundaryInputKind kind, VectorXd rest_targets)
+    : m_kind(kind), m_rest_targets(std::move(rest_targets))
+{
+    if (m_rest_targets.size() % 3 != 0)
+        throw Error("BoundaryInput: rest targets of size " + std::to_string(m_rest_targets.size()) +
+                    " (expected 3B, xyz interleaved)");
+}
+
+namespace {
+
+VectorXd rest_dirichlet_positions(const PhysicsSpec& physics)
+{
+    VectorXd rest(3 * Index(physics.bc_indices.size()));
+    for (size_t b = 0; b < physics.bc_indices.size(); ++b)
+        rest.segment<3>(3 * Index(b)) = physics.mesh.rest_positions.row(physics.bc_indices[b]).transpose();
+    return rest;
+}
+
+} // namespace
+
+BoundaryInput::BoundaryInput(BoundaryInputKind kind, const PhysicsSpec& physics)
+    : BoundaryInput(kind, rest_dirichlet_positions(physics))
+{
+}
+
+VectorXd BoundaryInput::pose(const Eigen::Ref<const VectorXd>& targets) const
+{
+    if (targets.size() != m_rest_targets.size())
+        throw Error("BoundaryInput: " + std::to_string(targets.size()) + " Dirichlet targets, expected " +
+                    std::to_string(m_rest_targets.size()));
+    const VectorXd to = targets;
+    const RigidMotion motion = fit_rigid_motion(as_rows(m_rest_targets), as_rows(to));
+    VectorXd p(kPoseSize);
+    p << motion.to_centroid, motion.rotation.col(0), motion.rotation.col(1);
+    return p;
+}
+
+VectorXd BoundaryInput::of_frame(const Eigen::Ref<const VectorXd>& params, const Eigen::Ref<const VectorXd>& targets) const
+{
+    if (m_kind == BoundaryInputKind::Velocity) return params;
+    VectorXd p(size(params.size()));
+    p << params, pose(targets);
+    return p;
+}
+
+} // namespace lb
