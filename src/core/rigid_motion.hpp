@@ -14,6 +14,12 @@ struct RigidMotion {
     Vector3d apply(const Vector3d& p) const { return rotation * (p - from_centroid) + to_centroid; }
 };
 
+/// The rotation R maximising tr(R H) for the cross-covariance H = Σ_k p_k q_kᵀ of centred
+/// point sets p (from) and q (to): R p_k ≈ q_k (Kabsch, reflection corrected). The identity
+/// if the points are collinear (|σ₂| ≤ 1e-9 |σ₁|: a rotation about their line is free).
+/// Fixed-size: allocates nothing.
+Matrix3d kabsch_rotation(const Matrix3d& H);
+
 /// Least-squares rigid motion taking the points `from` to `to` (each K×3, Kabsch with
 /// reflection correction). Collinear or single points (rotation undetermined): the
 /// translation of the centroid only. No points: the identity.

@@ -6,6 +6,7 @@
 #include <Eigen/SVD>
 
 #include "core/error.hpp"
+#include "core/rigid_motion.hpp"
 
 namespace lb {
 
@@ -45,7 +46,7 @@ BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics, EncodingFrame
         m_rest_offsets.colwise() -= m_rest_offsets.rowwise().mean();
         // The rotation is fixed only if the set spans at least a plane.
         const Vector3d s = Eigen::JacobiSVD<Matrix3d>(m_rest_offsets * m_rest_offsets.transpose()).singularValues();
-        if (!(s[1] > 1e-12 * s[0]) || B < 3)
+        if (!(s[1] > 1e-9 * s[0]) || B < 3)
             throw ConfigError("BC-relative encoding: the rigid frame needs a Dirichlet set that fixes a rotation (at "
                               "least three non-collinear vertices); this one has " + std::to_string(B) +
                               (B < 3 ? " vertices" : " collinear vertices") + " (use frame = \"translation\")");
@@ -117,10 +118,7 @@ Matrix3d BcRelativeEncoding::frame_rotation(const double* p) const
     // a loop, so the inference path allocates nothing.
     Matrix3d H = Matrix3d::Zero();
     for (Index b = 0; b < m_rest_offsets.cols(); ++b) H.noalias() += m_rest_offsets.col(b) * Eigen::Map<const Vector3d>(p + 3 * b).transpose();
-    const Eigen::JacobiSVD<Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Matrix3d D = Matrix3d::Identity();
-    if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) D(2, 2) = -1.0;
-    return svd.matrixV() * D * svd.matrixU().transpose();
+    return kabsch_rotation(H);
 }
 
 MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const
