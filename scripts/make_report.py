@@ -27,7 +27,7 @@ def publish(run_dir, name):
     out = os.path.join(ROOT, "results", name)
     if os.path.isdir(out):
         shutil.rmtree(out)
-    shutil.copytree(tables, os.path.join(out, "tables"))
+    shutil.copytree(tables, os.path.join(out, "tables"), ignore=shutil.ignore_patterns("*.key"))  # stage-cache keys
     figures = os.path.join(run_dir, "figures")
     count = 0
     for folder, _, files in os.walk(figures):
