@@ -65,6 +65,7 @@ std::string IntegratorTrainOptions::representation_text() const
 {
     std::string s = overwrite_dirichlet ? ", Dirichlet overwritten" : "";
     if (boundary_input == BoundaryInputKind::Pose) s += ", boundary pose in p";
+    if (float32_decoder && loss == IntegratorLoss::SelfSupervised) s += ", float32 decoder";  // the only loss that decodes
     return s;
 }
 
@@ -103,7 +104,7 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     s << ";seed=" << o.seed << ";max_seconds=" << nn::exact_text(o.max_seconds);
     // Trainer generation 2 (2026-11-30): every sample every epoch, the compiled frozen
     // decoder. Runs of generation 1 (the last partial batch dropped) are not resumed.
-    s << ";batches=all;decoder=compiled";
+    s << ";batches=all;decoder=compiled" << (o.float32_decoder ? "_float32" : "");
     return s.str();
 }
 
@@ -322,7 +323,7 @@ void IntegratorTrainer::prepare(LatentMlpModel& model, const TrainingSamples& sa
 {
     fit_input_statistics(model, samples);
     if (m_options.loss == IntegratorLoss::SelfSupervised) {
-        m_potential.freeze_decoder();  // the autoencoder does not change while the integrator trains
+        m_potential.freeze_decoder(m_options.float32_decoder);  // the autoencoder does not change while the integrator trains
         cache_decoded_inputs(samples);
     }
     if (m_options.loss == IntegratorLoss::SelfSupervised && m_options.data_balancing) {

@@ -72,6 +72,9 @@ struct IntegratorTrainOptions : nn::TrainingRunOptions {
     double balancing_floor = 0.05;
     double penalty_weight = 1e5;  ///< w_bc (cloth, solids)
     bool overwrite_dirichlet = false;
+    /// The self-supervised loss's frozen decoder in single precision (issue 14: float32
+    /// where it does not change results); the energies stay double.
+    bool float32_decoder = false;
     BoundaryInputKind boundary_input = BoundaryInputKind::Velocity;  ///< what p_t holds
     std::uint64_t seed = 0;
     /// One line for logs and file attributes.

@@ -66,8 +66,8 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
                     std::to_string(B) + " weights");
     LatentEnergies out;
     MatrixXd X;
-    if (m_frozen) {
-        m_frozen->forward_batch(Z, m_features, options.gradient);
+    if (decoder_frozen()) {
+        frozen_forward(Z, m_features, options.gradient);
         X = positions_of(m_features, bc_targets);
     } else {
         X = positions_of(m_autoencoder.decode_features(Z), bc_targets);
@@ -77,8 +77,8 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
         if (m_overwrite_dirichlet) {  // x_B = x*_B does not depend on z
             for (int v : m_model.bc_indices()) out.grad_x.middleRows<3>(3 * Index(v)).setZero();
         }
-        if (m_frozen)
-            m_frozen->vjp_batch(m_autoencoder.encoding().gradient_to_features(out.grad_x, bc_targets), out.grad_z);
+        if (decoder_frozen())
+            frozen_vjp(m_autoencoder.encoding().gradient_to_features(out.grad_x, bc_targets), out.grad_z);
         else
             out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x, bc_targets);
     }
@@ -139,16 +139,43 @@ LatentEnergies LatentPotential::evaluate_positions(const Eigen::Ref<const Matrix
     return out;
 }
 
-void LatentPotential::freeze_decoder()
+void LatentPotential::freeze_decoder(bool float32)
 {
-    m_frozen = std::make_unique<nn::InferenceNetworkD>(m_autoencoder.decoder());
+    m_frozen.reset();
+    m_frozen_float.reset();
+    if (float32)
+        m_frozen_float = std::make_unique<nn::InferenceNetwork>(m_autoencoder.decoder());
+    else
+        m_frozen = std::make_unique<nn::InferenceNetworkD>(m_autoencoder.decoder());
+}
+
+void LatentPotential::frozen_forward(const MatrixXd& Z, MatrixXd& features, bool record)
+{
+    if (m_frozen) {
+        m_frozen->forward_batch(Z, features, record);
+        return;
+    }
+    m_float_in = Z.cast<float>();
+    m_frozen_float->forward_batch(m_float_in, m_float_out, record);
+    features = m_float_out.cast<double>();
+}
+
+void LatentPotential::frozen_vjp(const MatrixXd& grad_features, MatrixXd& grad_z)
+{
+    if (m_frozen) {
+        m_frozen->vjp_batch(grad_features, grad_z);
+        return;
+    }
+    m_float_in = grad_features.cast<float>();
+    m_frozen_float->vjp_batch(m_float_in, m_float_out);
+    grad_z = m_float_out.cast<double>();
 }
 
 MatrixXd LatentPotential::decode(const MatrixXd& Z, const MatrixXd& bc_targets)
 {
-    if (!m_frozen) return positions_of(m_autoencoder.decode_features(Z), bc_targets);
+    if (!decoder_frozen()) return positions_of(m_autoencoder.decode_features(Z), bc_targets);
     MatrixXd features;
-    m_frozen->forward_batch(Z, features, false);
+    frozen_forward(Z, features, false);
     return positions_of(features, bc_targets);
 }
 

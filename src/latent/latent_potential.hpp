@@ -95,9 +95,12 @@ public:
 
     /// Compile the decoder as it is now and use that copy from here on (see above). The
     /// results equal the live decoder's to round-off (the folding reorders operations);
-    /// later changes to the autoencoder's weights are NOT seen.
-    void freeze_decoder();
-    bool decoder_frozen() const { return m_frozen != nullptr; }
+    /// later changes to the autoencoder's weights are NOT seen. With `float32`, the copy
+    /// computes in single precision (latents in, features and their VJP out are converted;
+    /// the energies stay double): about half the GEMM cost, results to float round-off.
+    void freeze_decoder(bool float32 = false);
+    bool decoder_frozen() const { return m_frozen != nullptr || m_frozen_float != nullptr; }
+    bool decoder_float32() const { return m_frozen_float != nullptr; }
     /// D(z) for latent × B codes and 3B × B targets: the frozen copy if any, else the
     /// autoencoder's decode(); Dirichlet vertices overwritten if overwrites_dirichlet().
     MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
@@ -125,6 +128,10 @@ private:
     /// decode()'s positions of the features the (frozen or live) decoder gave: the
     /// encoding's, with the Dirichlet vertices overwritten if asked for.
     MatrixXd positions_of(const MatrixXd& features, const MatrixXd& bc_targets) const;
+    /// The frozen copy's forward (features F × B; `record` keeps its tape for frozen_vjp)
+    /// and vector-Jacobian product, in its precision.
+    void frozen_forward(const MatrixXd& Z, MatrixXd& features, bool record);
+    void frozen_vjp(const MatrixXd& grad_features, MatrixXd& grad_z);
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
@@ -132,8 +139,10 @@ private:
     bool m_overwrite_dirichlet = false;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
     std::vector<VectorXd> m_gradients;               ///< one x-gradient workspace per thread
-    std::unique_ptr<nn::InferenceNetworkD> m_frozen;  ///< freeze_decoder()'s compiled decoder
-    MatrixXd m_features;                              ///< its output workspace
+    std::unique_ptr<nn::InferenceNetworkD> m_frozen;       ///< freeze_decoder()'s compiled decoder
+    std::unique_ptr<nn::InferenceNetwork> m_frozen_float;  ///< or its single-precision copy
+    MatrixXd m_features;                                   ///< its output workspace
+    Eigen::MatrixXf m_float_in, m_float_out;               ///< the float copy's conversions
 };
 
 } // namespace lb

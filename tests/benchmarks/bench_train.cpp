@@ -80,7 +80,8 @@ TrainingSetup& setup(const std::string& scene_name)
     return *slot;
 }
 
-void train_epoch(benchmark::State& state, const std::string& scene_name)
+/// @param float32  the frozen decoder in single precision (`float32_decoder`)
+void train_epoch(benchmark::State& state, const std::string& scene_name, bool float32)
 {
     set_log_level(LogLevel::Quiet);
     TrainingSetup* s = nullptr;
@@ -95,6 +96,7 @@ void train_epoch(benchmark::State& state, const std::string& scene_name)
     options.batch_size = 256;
     options.learning_rate = 1e-3;
     options.progress = false;
+    options.float32_decoder = float32;
     LatentMlpModel net =
         LatentMlpModel::create(s->autoencoder->latent_dim(), s->samples.p.rows(), options.hidden, options.seed);
     IntegratorTrainer trainer(*s->model, *s->autoencoder, options);
@@ -109,7 +111,9 @@ void train_epoch(benchmark::State& state, const std::string& scene_name)
 }
 
 #define LB_TRAIN_BENCH(name) \
-    BENCHMARK_CAPTURE(train_epoch, name, #name)->Unit(benchmark::kMillisecond)->MinTime(2.0)
+    BENCHMARK_CAPTURE(train_epoch, name, #name, false)->Unit(benchmark::kMillisecond)->MinTime(2.0)
+#define LB_TRAIN_BENCH_FLOAT32(name) \
+    BENCHMARK_CAPTURE(train_epoch, name##_float32, #name, true)->Unit(benchmark::kMillisecond)->MinTime(2.0)
 
 LB_TRAIN_BENCH(cloth);
 LB_TRAIN_BENCH(cantilever);
@@ -117,6 +121,8 @@ LB_TRAIN_BENCH(rods_translate);
 LB_TRAIN_BENCH(rods_rotate);
 LB_TRAIN_BENCH(armadillo);
 LB_TRAIN_BENCH(bunny_ears);
+LB_TRAIN_BENCH_FLOAT32(cloth);
+LB_TRAIN_BENCH_FLOAT32(cantilever);
 
 } // namespace
 } // namespace lb

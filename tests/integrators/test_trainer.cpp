@@ -103,16 +103,20 @@ TEST(ResolvedOptions, RepresentationSwitchesOnlyWhenNotTheDefault)
     EXPECT_EQ(paper.find("balancing_velocity"), std::string::npos) << paper;
     EXPECT_EQ(paper.find("overwrite_dirichlet"), std::string::npos) << paper;
     EXPECT_EQ(paper.find("boundary_input"), std::string::npos) << paper;
+    EXPECT_NE(paper.find(";decoder=compiled"), std::string::npos) << paper;
+    EXPECT_EQ(paper.find("float32"), std::string::npos) << paper;
     o.balancing_velocity = BalancingVelocity::MeanSpeed;
     o.overwrite_dirichlet = true;
     o.boundary_input = BoundaryInputKind::Pose;
+    o.float32_decoder = true;
     IntegratorTrainer changed(*p.model, *p.ae, o);
     const std::string text = changed.resolved_options(p.samples.size());
     EXPECT_NE(text.find(";balancing_velocity=mean_speed"), std::string::npos) << text;
     EXPECT_NE(text.find(";overwrite_dirichlet=on"), std::string::npos) << text;
     EXPECT_NE(text.find(";boundary_input=pose"), std::string::npos) << text;
+    EXPECT_NE(text.find(";decoder=compiled_float32"), std::string::npos) << text;
     EXPECT_EQ(o.describe().find("self_supervised, hidden [256,256,256,256,256], noise on, balancing on (mean speed), "
-                                "Dirichlet overwritten, boundary pose in p, lr"),
+                                "Dirichlet overwritten, boundary pose in p, float32 decoder, lr"),
               0u)
         << o.describe();
 

@@ -199,6 +199,38 @@ TEST_P(LatentPotentialPhysics, BatchAgreesWithSingleSamplesAndTheDirectComputati
     }
 }
 
+// The frozen decoder (the integrator trainers' path): the compiled double copy equals the
+// live decoder to round-off; the float32 copy (issue 14) to single-precision round-off, and
+// it really is single precision (not bit-identical to double).
+TEST_P(LatentPotentialPhysics, FrozenDecoderMatchesTheLiveOneInDoubleAndToFloatRoundOffInFloat)
+{
+    const Index B = 5;
+    Problem p(GetParam().physics(), B, 9);
+    LatentEnergyOptions options;
+    options.gradient = true;
+    options.decoded = true;
+    LatentPotential live(*p.model, *p.ae, kPenaltyWeight);
+    const LatentEnergies e = live.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    LatentPotential frozen(*p.model, *p.ae, kPenaltyWeight);
+    frozen.freeze_decoder();
+    EXPECT_TRUE(frozen.decoder_frozen());
+    EXPECT_FALSE(frozen.decoder_float32());
+    const LatentEnergies d = frozen.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    EXPECT_TRUE(close(d.energies, e.energies, 1e-10, "double copy: energies"));
+    EXPECT_TRUE(close(d.grad_z, e.grad_z, 1e-9, "double copy: grad_z"));
+    LatentPotential single(*p.model, *p.ae, kPenaltyWeight);
+    single.freeze_decoder(true);
+    EXPECT_TRUE(single.decoder_float32());
+    const LatentEnergies f = single.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    const double scale = e.X.cwiseAbs().maxCoeff();
+    const double position_error = (f.X - e.X).cwiseAbs().maxCoeff();
+    EXPECT_GT(position_error, 0.0) << "the float32 copy gave double results";
+    EXPECT_LT(position_error, 1e-5 * scale);
+    EXPECT_TRUE(close(f.energies, e.energies, 1e-3, "float copy: energies"));
+    EXPECT_TRUE(close(f.grad_z, e.grad_z, 1e-2, "float copy: grad_z"));
+    EXPECT_TRUE(close(single.decode(p.Z, p.T), f.X, 0.0, "float copy: decode = evaluate's positions"));
+}
+
 // Without weights every w_i = 1; without the flags no gradient and no positions.
 TEST_P(LatentPotentialPhysics, DefaultsAreUnitWeightsAndNoGradient)
 {

@@ -117,6 +117,18 @@ TEST(LatentMlpOptions, OverwriteDirichletIsInTheKeyOnlyWhenOn)
     expect_config_error("overwrite_dirichlet = \"yes\"\n", {"overwrite_dirichlet"});
 }
 
+// The float32 frozen decoder (issue 14): in the key only when on and only for the loss
+// that decodes while training; named in table rows; a non-boolean refused by name.
+TEST(LatentMlpOptions, Float32DecoderIsInTheKeyOnlyWhenOnForTheSelfSupervisedLoss)
+{
+    expect_in_the_key_only_when_not_the_papers("float32_decoder", "false", "true", "float32_decoder = true",
+                                               "self_supervised, noise on, balancing on, float32 decoder");
+    const std::unique_ptr<Method> supervised = parse("loss = \"supervised_l2\"\nfloat32_decoder = true\n");
+    EXPECT_EQ(supervised->summary(), "supervised_l2");
+    EXPECT_EQ(supervised->options_text(), parse("loss = \"supervised_l2\"\n")->options_text());
+    expect_config_error("float32_decoder = \"yes\"\n", {"float32_decoder"});
+}
+
 // The boundary pose in p_t (issue 14): in the key only when not the paper's velocities,
 // named in table rows, an unknown value refused naming the key and the accepted values.
 TEST(LatentMlpOptions, BoundaryInputIsInTheKeyOnlyWhenNotTheDefault)

@@ -40,6 +40,7 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
     o.balancing_velocity = get_choice(t, "balancing_velocity", o.balancing_velocity, balancing_velocity_from_string);
     o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
     o.overwrite_dirichlet = t.get_bool("overwrite_dirichlet", o.overwrite_dirichlet);
+    o.float32_decoder = t.get_bool("float32_decoder", o.float32_decoder);
     o.boundary_input = get_choice(t, "boundary_input", o.boundary_input, boundary_input_from_string);
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
     if (o.epochs < 1) t.fail("epochs", "must be at least 1");
@@ -91,6 +92,8 @@ public:
         }
         t.insert_or_assign("penalty_weight", o.penalty_weight);
         if (o.overwrite_dirichlet) t.insert_or_assign("overwrite_dirichlet", true);  // only when on: earlier keys stay
+        if (o.float32_decoder && o.loss == IntegratorLoss::SelfSupervised)  // only that loss decodes while training
+            t.insert_or_assign("float32_decoder", true);
         if (o.boundary_input != BoundaryInputKind::Velocity) t.insert_or_assign("boundary_input", to_string(o.boundary_input));
         t.insert_or_assign("seed", (long long)o.seed);
         t.insert_or_assign("max_seconds", o.max_seconds);
