@@ -41,8 +41,8 @@ BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics, EncodingFrame
     }
     if (m_frame == EncodingFrame::rigid) {
         const Index B = Index(m_bc_indices.size());
-        m_rest_offsets.resize(3, B);
-        for (Index b = 0; b < B; ++b) m_rest_offsets.col(b) = physics.mesh.rest_positions.row(m_bc_indices[size_t(b)]).transpose();
+        const VectorXd rest = dirichlet_positions(m_bc_indices, flatten(physics.mesh.rest_positions));
+        m_rest_offsets = Eigen::Map<const Eigen::Matrix3Xd>(rest.data(), 3, B);
         m_rest_offsets.colwise() -= m_rest_offsets.rowwise().mean();
         // The rotation is fixed only if the set spans at least a plane.
         const Vector3d s = Eigen::JacobiSVD<Matrix3d>(m_rest_offsets * m_rest_offsets.transpose()).singularValues();
@@ -103,13 +103,6 @@ Vector3d BcRelativeEncoding::bc_mean(const Eigen::Ref<const VectorXd>& x) const
     return mean / double(m_bc_indices.size());
 }
 
-VectorXd BcRelativeEncoding::bc_positions_of(const Eigen::Ref<const VectorXd>& x) const
-{
-    VectorXd p(3 * Index(m_bc_indices.size()));
-    for (std::size_t b = 0; b < m_bc_indices.size(); ++b) p.segment<3>(3 * Index(b)) = x.segment<3>(3 * Index(m_bc_indices[b]));
-    return p;
-}
-
 Matrix3d BcRelativeEncoding::frame_rotation(const double* p) const
 {
     if (m_frame == EncodingFrame::translation) return Matrix3d::Identity();
@@ -129,7 +122,7 @@ MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const
     const Index S = X.cols();
     MatrixXd F(m_num_features, S);
     for (Index s = 0; s < S; ++s) {
-        const Matrix3d Rt = frame_rotation(bc_positions_of(X.col(s)).data()).transpose();
+        const Matrix3d Rt = frame_rotation(dirichlet_positions(m_bc_indices, X.col(s)).data()).transpose();
         if (m_rod_relative) {
             for (std::size_t k = 0; k < m_rod_vertices.size(); ++k) {
                 const auto [v, slot] = m_rod_vertices[k];

@@ -68,8 +68,6 @@ public:
 private:
     template <typename Scalar>
     void positions_of_frame(const Scalar* f, const double* targets, double* x) const;
-    /// The Dirichlet positions of one 3N state (3B).
-    VectorXd bc_positions_of(const Eigen::Ref<const VectorXd>& x) const;
 
     /// Mean of the Dirichlet vertices of one 3N position vector.
     Vector3d bc_mean(const Eigen::Ref<const VectorXd>& x) const;

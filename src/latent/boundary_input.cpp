@@ -25,20 +25,8 @@ BoundaryInput::BoundaryInput(BoundaryInputKind kind, VectorXd rest_targets)
                     " (expected 3B, xyz interleaved)");
 }
 
-namespace {
-
-VectorXd rest_dirichlet_positions(const PhysicsSpec& physics)
-{
-    VectorXd rest(3 * Index(physics.bc_indices.size()));
-    for (size_t b = 0; b < physics.bc_indices.size(); ++b)
-        rest.segment<3>(3 * Index(b)) = physics.mesh.rest_positions.row(physics.bc_indices[b]).transpose();
-    return rest;
-}
-
-} // namespace
-
 BoundaryInput::BoundaryInput(BoundaryInputKind kind, const PhysicsSpec& physics)
-    : BoundaryInput(kind, rest_dirichlet_positions(physics))
+    : BoundaryInput(kind, dirichlet_positions(physics.bc_indices, flatten(physics.mesh.rest_positions)))
 {
 }
 

@@ -99,6 +99,13 @@ void overwrite_dirichlet(const std::vector<int>& bc_indices, const Eigen::Ref<co
     for (size_t b = 0; b < bc_indices.size(); ++b) x.segment<3>(3 * Index(bc_indices[b])) = targets.segment<3>(3 * Index(b));
 }
 
+VectorXd dirichlet_positions(const std::vector<int>& bc_indices, const Eigen::Ref<const VectorXd>& x)
+{
+    VectorXd p(3 * Index(bc_indices.size()));
+    for (size_t b = 0; b < bc_indices.size(); ++b) p.segment<3>(3 * Index(b)) = x.segment<3>(3 * Index(bc_indices[b]));
+    return p;
+}
+
 double applied_penalty_weight(const PhysicsModel& model, double penalty_weight)
 {
     return model.kind() == MeshKind::Rods ? 0.0 : penalty_weight;

@@ -74,6 +74,9 @@ private:
 /// @param x           3N positions
 void overwrite_dirichlet(const std::vector<int>& bc_indices, const Eigen::Ref<const VectorXd>& targets,
                          Eigen::Ref<VectorXd> x);
+/// The Dirichlet vertices of x (its inverse): 3B positions, xyz interleaved, in the order
+/// of bc_indices.
+VectorXd dirichlet_positions(const std::vector<int>& bc_indices, const Eigen::Ref<const VectorXd>& x);
 
 /// The boundary policy of reduced (latent and subspace) methods, stated once: their
 /// decoders cannot pin vertices exactly in general, so cloth and solids add the Dirichlet
