@@ -15,11 +15,9 @@
 // are therefore not an input (README, "Baseline tan_physics_mlp").
 //
 // Losses (means over the batch; λ weights applied by the caller's options):
-//   L_recon = Σ_b ‖D(E(x_b)) − x_b‖² / (3N · B)            position MSE per DOF (= L_vert
-//             without ACAP features: the two terms of Tan et al. coincide)
-//   L_ephys = c_E Σ_b E(D(E(x_m)); x̂_{m−1}, x̂_{m−2}, x*_m) / B,  x̂_k = sg(D(E(x_k)))
-//             (Tan eq. 5 with their stop-gradient on the first two arguments); gradients
-//             into the decoder and the encoder
+//   L_recon, L_ephys  latent/embedding_energy_loss.hpp (shared with the autoencoder's
+//             physics_epochs option); L_recon is L_vert without ACAP features (the two terms
+//             of Tan et al. coincide), L_ephys is Tan eq. 5 with their stop-gradient
 //   L_sim   = Σ_b ‖MLP(z_{m−2}, z_{m−1}, q_m) − z_m‖² / B  on ground-truth latents z = E(x)
 //   L_mphys = c_E Σ_b Σ_{k<K} E(D(ẑ_{m_k}); D(ẑ_{m_k−1}), D(ẑ_{m_k−2}), x*) / (B · K)
 //             over windows of K steps unrolled from the ground-truth latents of two frames
@@ -43,25 +41,12 @@
 #include <vector>
 
 #include "integrators/latent_mlp_integrator.hpp"
-#include "latent/autoencoder.hpp"
-#include "latent/latent_potential.hpp"
-#include "sim/physics_model.hpp"
+#include "latent/embedding_energy_loss.hpp"
 
 namespace lb {
 
-/// The training frames of a dataset, per sequence (columns are frames 0 … train_frames−1).
-struct TanSequence {
-    MatrixXd X;        ///< 3N × T positions
-    MatrixXd targets;  ///< 3B × T Dirichlet targets
-    MatrixXd params;   ///< P × T boundary parameters
-    Index frames() const { return X.cols(); }
-};
-
-/// A frame m ≥ 2 of a sequence (stages 1, 3) or the start t0 of a window (stage 2).
-struct TanSample {
-    Index sequence = 0;
-    Index frame = 0;
-};
+using TanSequence = FrameSequence;
+using TanSample = FrameSample;  ///< a frame m ≥ 2 (stages 1, 3) or the start t0 of a window (stage 2)
 
 /// The parts of a loss (unweighted means; 0 for terms the loss does not have).
 struct TanLossParts {
@@ -80,19 +65,19 @@ public:
     /// @param penalty_weight  w_bc of the incremental potential (0 for rods: applied_penalty_weight)
     TanLosses(const PhysicsModel& model, const Dataset& data, Autoencoder& autoencoder, double penalty_weight);
 
-    const std::vector<TanSequence>& sequences() const { return m_sequences; }
+    const std::vector<TanSequence>& sequences() const { return m_embedding.sequences(); }
     /// Every frame m ≥ 2 of the training window of every sequence.
-    std::vector<TanSample> frame_samples() const;
+    std::vector<TanSample> frame_samples() const { return m_embedding.frame_samples(); }
     /// Every window start t0 with t0 + window + 1 < train_frames (frames t0 … t0+window+1).
     std::vector<TanSample> window_samples(Index window) const;
     /// The longest window every sequence can hold: min over sequences of train_frames − 2.
     Index max_window() const;
     /// c_E = 2h² / (3N m̄).
-    double energy_scale() const { return m_energy_scale; }
-    Autoencoder& autoencoder() { return m_ae; }
+    double energy_scale() const { return m_embedding.energy_scale(); }
+    Autoencoder& autoencoder() { return m_embedding.autoencoder(); }
 
-    /// Stage 1: λ_recon L_recon + λ_ephys L_ephys over frames `batch`; with `gradient`,
-    /// parameter gradients of the encoder and decoder are ACCUMULATED.
+    /// Stage 1: λ_recon L_recon + λ_ephys L_ephys over frames `batch` (EmbeddingEnergyLoss);
+    /// with `gradient`, parameter gradients of the encoder and decoder are ACCUMULATED.
     double embedding_loss(const std::vector<TanSample>& batch, const TanWeights& w, bool gradient,
                           TanLossParts* parts = nullptr);
     /// Stage 2: λ_sim L_sim + λ_mphys L_mphys over windows `batch` of `window` steps; the
@@ -106,24 +91,11 @@ public:
                       TanLossParts* parts = nullptr);
 
 private:
-    /// Columns of frames m − lag of the batch: positions, targets, parameters.
-    MatrixXd gather(const std::vector<TanSample>& batch, Index lag, int which) const;
-    /// Encoder on [x_m, x_{m−1}, x_{m−2}] of the batch (L × 3B, eval mode; cache kept for backward).
-    MatrixXd encode_triples(const std::vector<TanSample>& batch);
     /// MLP inputs [z1, z2, p_m, p_{m−1}, p_{m−2}] for frames m of the batch.
     MatrixXd mlp_inputs(const MatrixXd& z1, const MatrixXd& z2, const std::vector<TanSample>& batch,
                         Index offset) const;
-    /// L_recon and L_ephys of decoded frames X_hat (3N × 3B: [x̂_m, x̂_{m−1}, x̂_{m−2}]) and
-    /// their weighted position gradient (3N × B) for the x̂_m columns.
-    double position_losses(const MatrixXd& X_hat, const std::vector<TanSample>& batch, const TanWeights& w,
-                           bool gradient, MatrixXd& grad_x, TanLossParts& parts);
 
-    const PhysicsModel& m_model;
-    Autoencoder& m_ae;
-    LatentPotential m_potential;
-    std::vector<TanSequence> m_sequences;
-    VectorXd m_dof_masses;  ///< 3N
-    double m_energy_scale = 1.0;
+    EmbeddingEnergyLoss m_embedding;
 };
 
 } // namespace lb

@@ -17,37 +17,6 @@ namespace {
 /// Samples per chunk when a stage's loss is evaluated over all its samples.
 constexpr Index kEvaluationChunk = 256;
 
-/// One stage as seen by the shared training loop.
-class TanStageLearner final : public nn::Learner {
-public:
-    using LossFn = std::function<double(const std::vector<TanSample>&)>;
-    TanStageLearner(std::vector<TanSample> samples, std::vector<nn::ParameterRef> parameters, LossFn loss)
-        : m_samples(std::move(samples)), m_parameters(std::move(parameters)), m_loss(std::move(loss))
-    {
-    }
-    Index num_samples() const override { return Index(m_samples.size()); }
-    std::vector<nn::ParameterRef> parameters() override { return m_parameters; }
-    double loss_and_gradient(const std::vector<Index>& indices, Rng&) override
-    {
-        std::vector<TanSample> batch;
-        batch.reserve(indices.size());
-        for (Index i : indices) batch.push_back(m_samples[size_t(i)]);
-        return m_loss(batch);
-    }
-
-private:
-    std::vector<TanSample> m_samples;
-    std::vector<nn::ParameterRef> m_parameters;
-    LossFn m_loss;
-};
-
-std::vector<nn::ParameterRef> autoencoder_parameters(Autoencoder& ae)
-{
-    std::vector<nn::ParameterRef> p = ae.encoder().parameters("tan_ae.encoder.");
-    for (auto& q : ae.decoder().parameters("tan_ae.decoder.")) p.push_back(q);
-    return p;
-}
-
 } // namespace
 
 std::string TanOptions::describe() const
@@ -165,7 +134,7 @@ TanStageReport TanTrainer::run_stage(int stage, LatentMlpModel* mlp, std::vector
     r.ran = true;
     r.loss_before = stage_loss(stage, mlp, r.parts_before);
     const nn::Fingerprint print = fingerprint(stage, mlp);
-    TanStageLearner learner(std::move(samples), std::move(parameters), loss);
+    FrameSampleLearner learner(std::move(samples), std::move(parameters), loss);
     r.loop = nn::run_training_loop(learner, loop_options(m_options, stage, epochs, learning_rate, checkpoint_for(stage)),
                                    print);
     r.loss_after = stage_loss(stage, mlp, r.parts_after);
@@ -175,7 +144,7 @@ TanStageReport TanTrainer::run_stage(int stage, LatentMlpModel* mlp, std::vector
 
 TanStageReport TanTrainer::stage1()
 {
-    return run_stage(1, nullptr, m_losses.frame_samples(), autoencoder_parameters(m_ae), m_options.stage1_epochs,
+    return run_stage(1, nullptr, m_losses.frame_samples(), autoencoder_parameters(m_ae, "tan_ae."), m_options.stage1_epochs,
                      m_options.ae_learning_rate, [&](const std::vector<TanSample>& b) {
                          return m_losses.embedding_loss(b, m_options.weights, true);
                      });
@@ -193,7 +162,7 @@ TanStageReport TanTrainer::stage2(LatentMlpModel& mlp)
 TanStageReport TanTrainer::stage3(LatentMlpModel& mlp)
 {
     if (!m_statistics_fitted) fit_mlp_statistics(mlp);
-    std::vector<nn::ParameterRef> params = autoencoder_parameters(m_ae);
+    std::vector<nn::ParameterRef> params = autoencoder_parameters(m_ae, "tan_ae.");
     for (auto& p : mlp.network.parameters("integrator.")) params.push_back(p);
     return run_stage(3, &mlp, m_losses.frame_samples(), std::move(params), m_options.stage3_epochs,
                      m_options.ae_learning_rate,

@@ -28,6 +28,9 @@ void register_train_ae(CLI::App& app)
         int patience = AutoencoderOptions{}.patience;
         double validation = AutoencoderOptions{}.validation_fraction;
         std::string frame = "translation";
+        int physics_epochs = AutoencoderOptions{}.physics_epochs;
+        double physics_weight = AutoencoderOptions{}.physics_weight;
+        double physics_lr = AutoencoderOptions{}.physics_learning_rate;
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("train-ae", "Train the BC-relative, PCA-initialised autoencoder on a dataset");
@@ -61,6 +64,17 @@ void register_train_ae(CLI::App& app)
                     "rigid (the boundary's best-fit rotation removed as well)")
         ->capture_default_str()
         ->check(CLI::IsMember({"translation", "rigid"}));
+    cmd->add_option("--physics-epochs", args->physics_epochs,
+                    "Epochs of physics fine-tuning after training: L_recon + weight * L_ephys, the incremental "
+                    "potential of the reconstructions (Tan et al.; 0: none)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, kMaxEpochs));
+    cmd->add_option("--physics-weight", args->physics_weight, "Weight of L_ephys in the physics fine-tuning")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--physics-lr", args->physics_lr, "Adam learning rate of the physics fine-tuning")
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber);
     cmd->callback([args] {
         check_output_path(args->output, "-o");
         if (!args->checkpoint.empty()) check_output_path(args->checkpoint, "--checkpoint");
@@ -78,6 +92,9 @@ void register_train_ae(CLI::App& app)
         options.patience = args->patience;
         options.validation_fraction = args->validation;
         options.frame = parse_encoding_frame(args->frame);
+        options.physics_epochs = args->physics_epochs;
+        options.physics_weight = args->physics_weight;
+        options.physics_learning_rate = args->physics_lr;
         options.progress = log_level() >= LogLevel::Info;
 
         Autoencoder ae(data.physics, options, options.seed);
@@ -89,6 +106,10 @@ void register_train_ae(CLI::App& app)
                     args->output.c_str(), data.scene_name.c_str(), long(ae.num_features()), long(ae.latent_dim()),
                     long(ae.options().pca_dim), s.epochs_run, s.best_epoch, s.stopped_early ? ", stopped early" : "",
                     s.resumed ? ", resumed" : "", s.best_validation, s.validation_relative_rmse, s.seconds);
+        if (s.physics_ran)
+            std::printf("physics fine-tuning: %d epochs, L_recon %.4e -> %.4e m², L_ephys %.6g -> %.6g, %.1f s\n",
+                        s.physics_epochs_run, s.physics_recon_before, s.physics_recon_after, s.physics_ephys_before,
+                        s.physics_ephys_after, s.physics_seconds);
     });
 }
 

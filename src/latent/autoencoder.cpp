@@ -15,6 +15,7 @@
 #include "core/log.hpp"
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
+#include "latent/embedding_energy_loss.hpp"
 #include "latent/pca.hpp"
 #include "nn/adam.hpp"
 #include "nn/checkpoint.hpp"
@@ -59,6 +60,16 @@ void validate_training(const AutoencoderOptions& o)
         throw ConfigError("autoencoder: validation_fraction must be < 1");
     if (o.patience < 0) throw ConfigError("autoencoder: patience must be ≥ 0 (0: no early stopping)");
     if (o.checkpoint_every < 1) throw ConfigError("autoencoder: checkpoint_every must be ≥ 1");
+    if (o.physics_epochs < 0)
+        throw ConfigError("autoencoder: physics_epochs must be ≥ 0 (got " + std::to_string(o.physics_epochs) + ")");
+    if (!(o.physics_weight >= 0.0) || !std::isfinite(o.physics_weight))
+        throw ConfigError("autoencoder: physics_weight must be ≥ 0 and finite");
+    if (!(o.physics_learning_rate > 0.0) || !std::isfinite(o.physics_learning_rate))
+        throw ConfigError("autoencoder: physics_learning_rate must be positive and finite");
+    if (o.physics_batch < 1)
+        throw ConfigError("autoencoder: physics_batch must be ≥ 1 (got " + std::to_string(o.physics_batch) + ")");
+    if (!(o.physics_penalty_weight > 0.0) || !std::isfinite(o.physics_penalty_weight))
+        throw ConfigError("autoencoder: physics_penalty_weight must be positive and finite");
 }
 
 nn::Linear& linear_layer(nn::Sequential& net, Index i, const char* what)
@@ -356,9 +367,7 @@ public:
     Index num_samples() const override { return m_train.cols(); }
     std::vector<nn::ParameterRef> parameters() override
     {
-        std::vector<nn::ParameterRef> params = m_ae.encoder().parameters("encoder.");
-        for (auto& p : m_ae.decoder().parameters("decoder.")) params.push_back(p);
-        return params;
+        return autoencoder_parameters(m_ae, "");
     }
     /// ||f̂ − f||² / (3N · n) in training mode (BatchNorm batch statistics).
     double loss_and_gradient(const std::vector<Index>& indices, Rng&) override
@@ -418,6 +427,77 @@ private:
     double m_dofs;
 };
 
+
+/// Mean of L_recon and L_ephys over `samples`, in chunks, without gradients.
+EmbeddingLossParts mean_embedding_parts(EmbeddingEnergyLoss& loss, const std::vector<FrameSample>& samples,
+                                        double ephys_weight)
+{
+    constexpr Index kChunk = 256;
+    EmbeddingLossParts mean;
+    const Index S = Index(samples.size());
+    for (Index begin = 0; begin < S; begin += kChunk) {
+        const Index end = std::min(S, begin + kChunk);
+        EmbeddingLossParts p;
+        loss.loss({samples.begin() + begin, samples.begin() + end}, 1.0, ephys_weight, false, &p);
+        const double f = double(end - begin) / double(S);
+        mean.recon += f * p.recon;
+        mean.ephys += f * p.ephys;
+    }
+    return mean;
+}
+
+/// The physics fine-tuning of train_autoencoder (options.physics_epochs > 0).
+void finetune_physics(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& o,
+                      AutoencoderTrainSummary& summary)
+{
+    Timer timer;
+    const PhysicsModel model(data.physics);
+    EmbeddingEnergyLoss loss(model, data, ae, o.physics_penalty_weight, "autoencoder physics fine-tuning");
+    const std::vector<FrameSample> samples = loss.frame_samples();
+    const EmbeddingLossParts before = mean_embedding_parts(loss, samples, o.physics_weight);
+
+    std::ostringstream os;
+    os << "physics_epochs=" << o.physics_epochs << ";weight=" << hexfloat(o.physics_weight)
+       << ";lr=" << hexfloat(o.physics_learning_rate) << ";batch=" << o.physics_batch
+       << ";penalty=" << hexfloat(o.physics_penalty_weight) << ";seed=" << o.seed
+       << ";max_seconds=" << hexfloat(o.max_seconds);
+    Fnv1a64 frames;
+    for (const FrameSequence& s : loss.sequences()) frames.add(s.X).add(s.targets);
+    nn::Fingerprint print;
+    print.add("options", os.str())
+        .add("autoencoder", ae.content_hash())
+        .add("data", frames.hex())
+        .add("physics", physics_content_hash(data.physics));
+
+    nn::TrainingLoopOptions loop;
+    static_cast<nn::TrainingRunOptions&>(loop) = o;
+    loop.checkpoint_path = o.checkpoint_path.empty() ? std::string() : o.checkpoint_path + ".physics";
+    loop.label = "train-ae physics";
+    loop.epochs = o.physics_epochs;
+    loop.batch_size = o.physics_batch;
+    loop.learning_rate = o.physics_learning_rate;
+    loop.seed = o.seed + 1;
+    const double weight = o.physics_weight;
+    FrameSampleLearner learner(samples, autoencoder_parameters(ae, ""), [&](const std::vector<FrameSample>& b) {
+        return loss.loss(b, 1.0, weight, true);
+    });
+    const nn::TrainingLoopSummary run = nn::run_training_loop(learner, loop, print);
+    const EmbeddingLossParts after = mean_embedding_parts(loss, samples, o.physics_weight);
+    summary.physics_ran = true;
+    summary.physics_recon_before = before.recon;
+    summary.physics_recon_after = after.recon;
+    summary.physics_ephys_before = before.ephys;
+    summary.physics_ephys_after = after.ephys;
+    summary.physics_epochs_run = run.epochs_run;
+    summary.physics_seconds = timer.seconds();
+    summary.time_limited = summary.time_limited || run.time_limited;
+    summary.interrupted = summary.interrupted || run.interrupted;
+    if (o.progress)
+        log_info("autoencoder physics fine-tuning: %d epochs, L_recon %.4e -> %.4e m², L_ephys %.6g -> %.6g "
+                 "(weight %g), %.1f s%s",
+                 run.epochs_run, before.recon, after.recon, before.ephys, after.ephys, o.physics_weight,
+                 summary.physics_seconds, run.time_limited ? " (time limit)" : "");
+}
 } // namespace
 
 AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& options)
@@ -485,6 +565,7 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     static_cast<nn::TrainingLoopSummary&>(summary) = nn::run_training_loop(learner, loop, print);
     // No epoch run: the PCA-initialised network.
     if (summary.best_epoch == 0) summary.best_validation = eval_mse(ae, val_features);
+    if (options.physics_epochs > 0 && !summary.interrupted) finetune_physics(ae, data, options, summary);
     summary.validation_relative_rmse = ae.relative_rmse(val_positions, val_targets);
     summary.seconds = timer.seconds();
     if (options.progress)

@@ -51,6 +51,14 @@ struct AutoencoderOptions : nn::TrainingRunOptions {
     /// Early stopping: stop after this many epochs without a validation improvement (0: never).
     int patience = 200;
     std::uint64_t seed = 0;
+    // Physics fine-tuning (embedding_energy_loss.hpp; Tan et al.'s L_ephys): after the
+    // reconstruction training, physics_epochs epochs of L_recon + physics_weight · L_ephys
+    // over the training frames m ≥ 2 (0: none, the paper's autoencoder).
+    int physics_epochs = 0;
+    double physics_weight = 0.5;          ///< λ_ephys (Tan et al.'s 0.5; λ_recon is 1)
+    double physics_learning_rate = 1e-5;  ///< Tan et al.'s fine-tuning rate (stages 1, 3)
+    int physics_batch = 64;               ///< frames per batch
+    double physics_penalty_weight = 1e5;  ///< w_bc of the potential (0 applied for rods)
 };
 
 /// The shared loop's summary (best_validation: mean squared error per DOF (m²) of the
@@ -58,6 +66,13 @@ struct AutoencoderOptions : nn::TrainingRunOptions {
 struct AutoencoderTrainSummary : nn::TrainingLoopSummary {
     /// Relative RMS reconstruction error on validation frames: RMS(x̂ − x) / bbox diagonal.
     double validation_relative_rmse = 0.0;
+    /// Physics fine-tuning (options.physics_epochs > 0): L_recon and L_ephys (unweighted
+    /// means over the training frames m ≥ 2) before and after, its epochs and seconds.
+    bool physics_ran = false;
+    double physics_recon_before = 0.0, physics_recon_after = 0.0;
+    double physics_ephys_before = 0.0, physics_ephys_after = 0.0;
+    int physics_epochs_run = 0;
+    double physics_seconds = 0.0;
 };
 
 class Autoencoder {
@@ -173,6 +188,12 @@ FrameSet training_frames(const Dataset& data);
 ///   resumes from it bit-for-bit. Otherwise (or if any tensor has the wrong shape) it is
 ///   set aside as `<path>.stale` with a log line saying why, and training starts afresh.
 /// - Same seed and data → bitwise-identical weights (single-threaded Eigen).
+/// - Physics fine-tuning (options.physics_epochs > 0), after the above: the shared loop on
+///   L_recon + physics_weight · L_ephys (EmbeddingEnergyLoss) over every training frame
+///   m ≥ 2, eval-mode BatchNorm, Adam at physics_learning_rate, no validation or early stop;
+///   checkpoint `<checkpoint_path>.physics` (fingerprint: these options, the trained
+///   autoencoder's content hash, the data and the physics). validation_relative_rmse is
+///   measured after it.
 AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& options);
 
 

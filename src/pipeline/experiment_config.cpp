@@ -1,6 +1,7 @@
 #include "lb_paths.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -49,7 +50,14 @@ void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
         }
     }
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
+    o.physics_epochs = int(t.get_int("physics_epochs", o.physics_epochs, 0, kMaxEpochs));
+    o.physics_weight = t.get_double("physics_weight", o.physics_weight);
+    o.physics_learning_rate = t.get_double("physics_learning_rate", o.physics_learning_rate);
+    o.physics_batch = t.get_count("physics_batch", o.physics_batch, 1, kMaxBatch);
     if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");
+    if (!(o.physics_weight >= 0.0) || !std::isfinite(o.physics_weight)) t.fail("physics_weight", "must be ≥ 0 and finite");
+    if (!(o.physics_learning_rate > 0.0) || !std::isfinite(o.physics_learning_rate))
+        t.fail("physics_learning_rate", "must be positive and finite");
     if (!(o.validation_fraction > 0.0 && o.validation_fraction < 1.0)) t.fail("validation", "must lie in (0, 1)");
     t.finish();
 }

@@ -45,6 +45,9 @@ std::string autoencoder_stage_key(const std::string& sim_key, const AutoencoderO
       << o.epochs << "|" << o.batch_size << "|" << o.learning_rate << "|" << o.validation_fraction << "|" << o.patience
       << "|" << o.seed;
     if (o.frame != EncodingFrame::translation) s << "|frame=" << encoding_frame_name(o.frame);  // older keys unchanged
+    if (o.physics_epochs > 0)
+        s << "|physics=" << o.physics_epochs << "," << o.physics_weight << "," << o.physics_learning_rate << ","
+          << o.physics_batch << "," << o.physics_penalty_weight;
     return fnv1a64_hex(sim_key + "|autoencoder|" + s.str());
 }
 

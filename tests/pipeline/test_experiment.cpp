@@ -12,6 +12,7 @@
 #include "io/hdf5.hpp"
 #include "baselines/builtin_methods.hpp"
 #include "pipeline/experiment.hpp"
+#include "pipeline/plan.hpp"
 
 namespace lb {
 namespace {
@@ -143,6 +144,37 @@ TEST(Experiment, RejectsBadKeysByName)
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("autoencoder.frame"), std::string::npos) << e.what();
+    }
+    // Physics fine-tuning of the autoencoder (issue 14): keys read, range-checked, named.
+    text = kTiny;
+    text.replace(text.find("pca = 8"), 7, "pca = 8\nphysics_epochs = 20\nphysics_weight = 0.25");
+    {
+        const AutoencoderOptions ao =
+            load_experiment(write_experiment("physics_ae", text), builtin_methods()).scenes[0].autoencoder;
+        EXPECT_EQ(ao.physics_epochs, 20);
+        EXPECT_EQ(ao.physics_weight, 0.25);
+        // In the stage key only when on, so every earlier autoencoder stays cached.
+        AutoencoderOptions off = ao;
+        off.physics_epochs = 0;
+        AutoencoderOptions off_weight = off;
+        off_weight.physics_weight = 0.5;
+        EXPECT_NE(autoencoder_stage_key("sim", ao), autoencoder_stage_key("sim", off));
+        EXPECT_EQ(autoencoder_stage_key("sim", off), autoencoder_stage_key("sim", off_weight));
+        AutoencoderOptions heavier = ao;
+        heavier.physics_weight = 1.0;
+        EXPECT_NE(autoencoder_stage_key("sim", ao), autoencoder_stage_key("sim", heavier));
+    }
+    for (const char* bad : {"physics_epochs = -3", "physics_weight = -1.0", "physics_learning_rate = 0.0",
+                            "physics_weight = inf"}) {
+        text = kTiny;
+        text.replace(text.find("pca = 8"), 7, std::string("pca = 8\n") + bad);
+        try {
+            load_experiment(write_experiment("bad_physics_ae", text), builtin_methods());
+            ADD_FAILURE() << "expected ConfigError for " << bad;
+        } catch (const ConfigError& e) {
+            const std::string key = std::string(bad).substr(0, std::string(bad).find(' '));
+            EXPECT_NE(std::string(e.what()).find("autoencoder." + key), std::string::npos) << e.what();
+        }
     }
     text = kTiny;
     text.replace(text.find("method = \"linear_pca\""), 21, "method = \"cubature\"");
