@@ -18,6 +18,35 @@ Matrix3d kabsch_rotation(const Matrix3d& H)
     return svd.matrixV() * correction * svd.matrixU().transpose();
 }
 
+RestFrame::RestFrame(const Eigen::Ref<const VectorXd>& rest)
+    : m_offsets(Eigen::Map<const Eigen::Matrix3Xd>(rest.data(), 3, rest.size() / 3))
+{
+    if (m_offsets.cols() > 0) m_offsets.colwise() -= m_offsets.rowwise().mean();
+}
+
+bool RestFrame::fixes_rotation() const
+{
+    if (m_offsets.cols() < 3) return false;
+    const Vector3d s = Eigen::JacobiSVD<Matrix3d>(m_offsets * m_offsets.transpose()).singularValues();
+    return s[1] > 1e-9 * s[0];
+}
+
+Matrix3d RestFrame::rotation(const double* p) const
+{
+    // H = Σ_k (p⁰_k − c⁰)(p_k − c)ᵀ = Σ_k (p⁰_k − c⁰) p_kᵀ (the rest offsets sum to zero).
+    Matrix3d H = Matrix3d::Zero();
+    for (Index k = 0; k < m_offsets.cols(); ++k)
+        H.noalias() += m_offsets.col(k) * Eigen::Map<const Vector3d>(p + 3 * k).transpose();
+    return kabsch_rotation(H);
+}
+
+Vector3d RestFrame::centroid(const double* p) const
+{
+    Vector3d c = Vector3d::Zero();
+    for (Index k = 0; k < m_offsets.cols(); ++k) c += Eigen::Map<const Vector3d>(p + 3 * k);
+    return m_offsets.cols() > 0 ? Vector3d(c / double(m_offsets.cols())) : c;
+}
+
 RigidMotion fit_rigid_motion(const MatrixX3d& from, const MatrixX3d& to)
 {
     RigidMotion m;

@@ -3,7 +3,6 @@
 
 #include <string>
 
-#include <Eigen/SVD>
 
 #include "core/error.hpp"
 #include "core/rigid_motion.hpp"
@@ -40,13 +39,9 @@ BcRelativeEncoding::BcRelativeEncoding(const PhysicsSpec& physics, EncodingFrame
         bc_slot[static_cast<std::size_t>(v)] = static_cast<int>(b);
     }
     if (m_frame == EncodingFrame::rigid) {
-        const Index B = Index(m_bc_indices.size());
-        const VectorXd rest = dirichlet_positions(m_bc_indices, flatten(physics.mesh.rest_positions));
-        m_rest_offsets = Eigen::Map<const Eigen::Matrix3Xd>(rest.data(), 3, B);
-        m_rest_offsets.colwise() -= m_rest_offsets.rowwise().mean();
-        // The rotation is fixed only if the set spans at least a plane.
-        const Vector3d s = Eigen::JacobiSVD<Matrix3d>(m_rest_offsets * m_rest_offsets.transpose()).singularValues();
-        if (!(s[1] > 1e-9 * s[0]) || B < 3)
+        m_rest_frame = RestFrame(dirichlet_positions(m_bc_indices, flatten(physics.mesh.rest_positions)));
+        const Index B = m_rest_frame.size();
+        if (!m_rest_frame.fixes_rotation())
             throw ConfigError("BC-relative encoding: the rigid frame needs a Dirichlet set that fixes a rotation (at "
                               "least three non-collinear vertices); this one has " + std::to_string(B) +
                               (B < 3 ? " vertices" : " collinear vertices") + " (use frame = \"translation\")");
@@ -105,13 +100,7 @@ Vector3d BcRelativeEncoding::bc_mean(const Eigen::Ref<const VectorXd>& x) const
 
 Matrix3d BcRelativeEncoding::frame_rotation(const double* p) const
 {
-    if (m_frame == EncodingFrame::translation) return Matrix3d::Identity();
-    // Kabsch: R minimises Σ_b |R (p⁰_b − c⁰) − (p_b − c)|² over rotations.
-    // H = Σ_b (p⁰_b − c⁰)(p_b − c)ᵀ = Σ_b (p⁰_b − c⁰) p_bᵀ (the rest offsets sum to zero);
-    // a loop, so the inference path allocates nothing.
-    Matrix3d H = Matrix3d::Zero();
-    for (Index b = 0; b < m_rest_offsets.cols(); ++b) H.noalias() += m_rest_offsets.col(b) * Eigen::Map<const Vector3d>(p + 3 * b).transpose();
-    return kabsch_rotation(H);
+    return m_frame == EncodingFrame::translation ? Matrix3d::Identity() : m_rest_frame.rotation(p);
 }
 
 MatrixXd BcRelativeEncoding::to_features(const MatrixXd& X) const

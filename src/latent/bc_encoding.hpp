@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "core/rigid_motion.hpp"
 #include "sim/physics_model.hpp"
 
 namespace lb {
@@ -74,8 +75,7 @@ private:
 
     bool m_rod_relative = false;
     EncodingFrame m_frame = EncodingFrame::translation;
-    /// Rigid frame: the Dirichlet set's rest offsets from its mean, 3 × B.
-    Eigen::Matrix3Xd m_rest_offsets;
+    RestFrame m_rest_frame;  ///< the Dirichlet set at rest (rigid frame only)
     Index m_num_dofs = 0;
     Index m_num_features = 0;
     std::vector<int> m_bc_indices;

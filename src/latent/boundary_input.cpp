@@ -18,7 +18,7 @@ BoundaryInputKind boundary_input_from_string(const std::string& name)
 }
 
 BoundaryInput::BoundaryInput(BoundaryInputKind kind, VectorXd rest_targets)
-    : m_kind(kind), m_rest_targets(std::move(rest_targets))
+    : m_kind(kind), m_rest_targets(std::move(rest_targets)), m_rest_frame(m_rest_targets)
 {
     if (m_rest_targets.size() % 3 != 0)
         throw Error("BoundaryInput: rest targets of size " + std::to_string(m_rest_targets.size()) +
@@ -35,10 +35,9 @@ VectorXd BoundaryInput::pose(const Eigen::Ref<const VectorXd>& targets) const
     if (targets.size() != m_rest_targets.size())
         throw Error("BoundaryInput: " + std::to_string(targets.size()) + " Dirichlet targets, expected " +
                     std::to_string(m_rest_targets.size()));
-    const VectorXd to = targets;
-    const RigidMotion motion = fit_rigid_motion(as_rows(m_rest_targets), as_rows(to));
+    const Matrix3d R = m_rest_frame.rotation(targets.data());
     VectorXd p(kPoseSize);
-    p << motion.to_centroid, motion.rotation.col(0), motion.rotation.col(1);
+    p << m_rest_frame.centroid(targets.data()), R.col(0), R.col(1);
     return p;
 }
 

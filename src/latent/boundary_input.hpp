@@ -12,6 +12,7 @@
 // integrator to infer where the boundary is (e.g. the rotated rods' angle) from z.
 #include <string>
 
+#include "core/rigid_motion.hpp"
 #include "core/types.hpp"
 #include "sim/physics_model.hpp"
 
@@ -50,6 +51,7 @@ public:
 private:
     BoundaryInputKind m_kind = BoundaryInputKind::Velocity;
     VectorXd m_rest_targets;
+    RestFrame m_rest_frame;  ///< of m_rest_targets
 };
 
 } // namespace lb

@@ -224,6 +224,33 @@ TEST(RigidMotion, KabschRecoversARotationAndFallsBackToATranslation)
     EXPECT_EQ(none.apply(Vector3d(1, 2, 3)), Vector3d(1, 2, 3));
 }
 
+TEST(RigidMotion, RestFrameAgreesWithTheGeneralFit)
+{
+    // RestFrame (the encoding's rigid frame and the boundary pose) fits the same motion as
+    // fit_rigid_motion from its rest points, without allocating per call.
+    MatrixX3d from(4, 3);
+    from << 0.0, 0.0, 0.0, 1.0, 0.2, 0.0, 0.1, 1.3, 0.4, 0.5, 0.5, 1.1;
+    const Matrix3d R = rotation_about({-1, 2, 0.5}, 1.1);
+    const Vector3d t(-0.4, 0.25, 2.0);
+    const MatrixX3d to = ((from * R.transpose()).rowwise() + t.transpose());
+    const VectorXd rest = Eigen::Map<const VectorXd>(MatrixXd(from.transpose()).data(), from.size());
+    const VectorXd now = Eigen::Map<const VectorXd>(MatrixXd(to.transpose()).data(), to.size());
+    const RestFrame frame(rest);
+    EXPECT_EQ(frame.size(), 4);
+    EXPECT_TRUE(frame.fixes_rotation());
+    const RigidMotion m = fit_rigid_motion(from, to);
+    EXPECT_LT((frame.rotation(now.data()) - R).norm(), 1e-12);
+    EXPECT_LT((frame.rotation(now.data()) - m.rotation).norm(), 1e-12);
+    EXPECT_LT((frame.centroid(now.data()) - m.to_centroid).norm(), 1e-12);
+    // Collinear or too few points fix no rotation: the identity, as the general fit gives.
+    const RestFrame line(rest.head(6));
+    EXPECT_FALSE(line.fixes_rotation());
+    EXPECT_EQ(line.rotation(now.data()), Matrix3d::Identity());
+    VectorXd collinear(9);
+    collinear << 0, 0, 0, 1, 1, 1, 2, 2, 2;
+    EXPECT_FALSE(RestFrame(collinear).fixes_rotation());
+}
+
 TEST(MetricContext, RigidlyCarriedFreeDofsHaveNoRelativeKineticEnergy)
 {
     // Before issue 10 only the lab-frame KE existed: the prescribed motion of the
