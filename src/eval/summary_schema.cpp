@@ -237,6 +237,12 @@ TableCell statistics_cell(std::vector<double> values, int digits)
 {
     if (values.empty()) return TableCell::missing("nan");
     std::sort(values.begin(), values.end());
+    // Counts (every value an integer: horizons, frames) keep all their integer digits, so a
+    // 1,500-frame horizon reads 1500, not 1.5e+03.
+    if (std::all_of(values.begin(), values.end(), [](double v) { return v == std::floor(v); })) {
+        const double largest = std::max(std::abs(values.front()), std::abs(values.back()));
+        if (largest >= 1.0 && largest < 1e15) digits = std::max(digits, int(std::floor(std::log10(largest))) + 1);
+    }
     const size_t n = values.size();
     if (n == 1) return TableCell(format_significant(values[0], digits), values[0]);
     if (n < 5) {

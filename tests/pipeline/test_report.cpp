@@ -24,9 +24,9 @@ std::string read_all(const std::string& path)
 }
 
 /// A 60-frame rollout trained on 30 frames, RMSE 0.01, non-finite from `stop` (0: never).
-RolloutSummary rollout_summary(Index stop)
+RolloutSummary rollout_summary(Index stop, Index frames = 60)
 {
-    MatrixXd m = MatrixXd::Zero(60, kNumMetricColumns);
+    MatrixXd m = MatrixXd::Zero(frames, kNumMetricColumns);
     for (Index t = 0; t < m.rows(); ++t) {
         m(t, kRmse) = 0.01;
         m(t, kBcViolation) = 2e-3;
@@ -236,6 +236,22 @@ TEST(Report, SeedsGiveAnIntervalOrARangeAndTheBudgetIsStated)
     EXPECT_EQ(cell_of(md, rows[0], "training"), "100/100 epochs, 12 s");
     EXPECT_EQ(cell_of(md, rows[3], "mean RMSE"), "0.02 [0.01, 0.03]");
     EXPECT_EQ(cell_of(md, rows[3], "training"), "40/100 epochs, 60 s (cap 60 s), time cap hit (3/3)");
+
+    // Horizons are counts: all their digits, not 1.5e+03 (5 seeds: ± with the same digits).
+    MethodResult longer = method_result("long", "latent_mlp", "self_supervised", true, {});
+    for (int k = 0; k < 5; ++k) {
+        longer.seeds.push_back(std::uint64_t(k));
+        longer.per_seed.push_back(rollout_summary(k == 0 ? 1234 : 0, 1500));
+        longer.summaries.push_back(longer.per_seed.back());
+    }
+    std::filesystem::remove_all(dir);
+    const std::string md_long = read_all(write_tables(ex, {scene_with({longer})}, dir).at(0));
+    const std::vector<std::string> rows_long = body_rows(md_long);
+    ASSERT_EQ(rows_long.size(), 2u) << md_long;
+    // 1234, 1500, 1500, 1500, 1500: mean 1446.8, s = 118.96, t(4) = 2.776: ± 147.7.
+    EXPECT_EQ(cell_of(md_long, rows_long[1], "stable (blow-up)"), "1447 ± 147.7 (1/5 diverged, earliest @1234)");
+    // Test window from frame 30: 1204 and 4 × 1470 frames before the horizons.
+    EXPECT_EQ(cell_of(md_long, rows_long[1], "frames aggregated"), "1417 ± 147.7");
 }
 
 } // namespace
