@@ -28,6 +28,9 @@ namespace lb {
 struct MethodSpec {
     std::string name;                ///< label in tables and file names
     std::shared_ptr<Method> method;  ///< parsed options (resolved when the scene is known)
+    /// The entry's own `seeds = [...]`: a subset of the suite's seeds that this method runs
+    /// (e.g. one seed of an expensive baseline); empty: every seed of the suite.
+    std::vector<std::uint64_t> seeds;
 };
 
 struct SceneSpec {

@@ -94,7 +94,8 @@ std::vector<ConfigTable> method_entries(ConfigTable& cfg, std::set<std::string>&
 /// [training] defaults (suite-wide, then the scene's [scenes.training]).
 SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOptions& ae_defaults,
                      bool latent_default_given, const toml::table* training, const std::vector<ConfigTable>& entries,
-                     const MethodRegistry& registry, const std::string& source)
+                     const MethodRegistry& registry, const std::string& source,
+                     const std::vector<std::uint64_t>& suite_seeds)
 {
     SceneSpec sc;
     sc.scene_path = resolve(s.require_string("scene"), base);
@@ -131,6 +132,18 @@ SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOp
         }
         MethodSpec m;
         m.name = entry.require_string("name");
+        if (entry.has("seeds")) {
+            if (suite_seeds.empty())
+                entry.fail("seeds", "an entry runs a subset of the suite's seeds; the suite sets no seeds = [...]");
+            for (const long long seed : entry.get_int_array("seeds", {}, 0, kMaxSeed)) {
+                if (std::find(suite_seeds.begin(), suite_seeds.end(), std::uint64_t(seed)) == suite_seeds.end())
+                    entry.fail("seeds", "seed " + std::to_string(seed) + " is not one of the suite's seeds");
+                if (std::find(m.seeds.begin(), m.seeds.end(), std::uint64_t(seed)) != m.seeds.end())
+                    entry.fail("seeds", "duplicate seed " + std::to_string(seed));
+                m.seeds.push_back(std::uint64_t(seed));
+            }
+            if (m.seeds.empty()) entry.fail("seeds", "list at least one seed (or leave the key out)");
+        }
         m.method = registry.parse(entry, defaults);
         sc.methods.push_back(std::move(m));
     }
@@ -194,7 +207,7 @@ ExperimentConfig parse_experiment(const toml::table& root, const std::string& pa
     const std::vector<ConfigTable> entries = method_entries(cfg, names);
     for (ConfigTable s : cfg.table_array("scenes")) {
         ex.scenes.push_back(read_scene(s, base, ae_defaults, latent_default_given, cfg.raw_table("training"), entries,
-                                       registry, path));
+                                       registry, path, ex.seeds));
     }
     if (ex.scenes.empty()) cfg.fail("scenes", "at least one [[scenes]] entry is required");
 

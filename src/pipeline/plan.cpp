@@ -208,7 +208,9 @@ private:
     {
         Method& method = method_of(p, s, m, full_space);
         method.resolve({scene_of(m_points[p]->scenes[s]).name, g.latent});
-        const std::vector<std::uint64_t>& seeds = m_points[p]->seeds;
+        const std::vector<std::uint64_t>& entry_seeds =
+            full_space ? m_points[p]->seeds : m_points[p]->scenes[s].methods[m].seeds;
+        const std::vector<std::uint64_t>& seeds = entry_seeds.empty() ? m_points[p]->seeds : entry_seeds;
         std::vector<Slot> slots;
         auto add = [&](std::optional<std::uint64_t> seed) {
             Slot slot;

@@ -85,7 +85,7 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
     for (const auto& m : r.methods) seeds = std::max(seeds, m.per_seed.size());
     if (seeds > 1)
         t.caption += " Methods trained once per seed (" + std::to_string(seeds) + " seeds) show " +
-                     seed_statistics_text(seeds) + "; the others one run.";
+                     seed_statistics_text(seeds) + "; the others one run (no seed, or an entry that lists one seed).";
     // A [sweep]: one row per point, labelled; rows the sweep does not change are shared.
     const bool swept = std::any_of(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return !m.point.empty(); });
     if (swept)

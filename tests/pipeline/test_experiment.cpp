@@ -317,20 +317,24 @@ TEST(Experiment, SeedsFitEveryLearnedMethodOncePerSeed)
     set_log_level(LogLevel::Quiet);
     std::string text = kTiny;
     text.replace(text.find("name = \"tiny\"\n"), 14, "name = \"tiny\"\nseeds = [0, 7]\n");
+    // An entry may run a subset of the suite's seeds (a budget for an expensive baseline).
+    text.replace(text.find("loss = \"supervised_l2\""), 22, "loss = \"supervised_l2\"\nseeds = [7]");
     const std::string path = write_experiment("seeds", text);
     const ExperimentConfig ex = load_experiment(path, builtin_methods());
     ASSERT_EQ(ex.seeds.size(), 2u);
+    ASSERT_EQ(ex.scenes[0].methods[1].seeds, std::vector<std::uint64_t>{7});
     RunOptions options;
     options.output_dir = fs::path(path).parent_path().string() + "/run";
     const RunResult run = run_experiment(ex, options);
-    // simulate, autoencoder, (ours, sup) × 2 seeds + pca, their 5 rollouts + full space
-    EXPECT_EQ(run.stages_run, 13);
+    // simulate, autoencoder, ours × 2 seeds + sup × 1 + pca, their 4 rollouts + full space
+    EXPECT_EQ(run.stages_run, 11);
     const std::string dir = options.output_dir + "/cantilever_small";
     for (const char* f : {"/integrators/ours.seed0.h5", "/integrators/ours.seed7.h5", "/integrators/sup.seed7.h5",
                           "/integrators/pca.h5", "/rollouts/ours.seed7.h5", "/rollouts/pca.h5"}) {
         EXPECT_TRUE(fs::exists(dir + f)) << f;
     }
     EXPECT_FALSE(fs::exists(dir + "/integrators/pca.seed0.h5"));
+    EXPECT_FALSE(fs::exists(dir + "/integrators/sup.seed0.h5"));
     const std::string table = read_all(options.output_dir + "/tables/methods_cantilever_small.md");
     EXPECT_NE(table.find("median [min, max] over the 2 seeds"), std::string::npos) << table;
     EXPECT_NE(table.find("| ours "), std::string::npos) << table;
@@ -340,6 +344,20 @@ TEST(Experiment, SeedsFitEveryLearnedMethodOncePerSeed)
         std::string t = kTiny;
         t.replace(t.find("name = \"tiny\"\n"), 14, std::string("name = \"tiny\"\n") + bad);
         EXPECT_THROW(load_experiment(write_experiment("bad_seeds", t), builtin_methods()), ConfigError) << bad;
+    }
+    // An entry's seeds must be the suite's (and the suite must have some).
+    for (const char* suite : {"seeds = [0, 7]\n", ""}) {
+        for (const char* entry : {"seeds = [3]", "seeds = [7, 7]", "seeds = []"}) {
+            std::string t = kTiny;
+            t.replace(t.find("name = \"tiny\"\n"), 14, std::string("name = \"tiny\"\n") + suite);
+            t.replace(t.find("loss = \"supervised_l2\""), 22, std::string("loss = \"supervised_l2\"\n") + entry);
+            try {
+                load_experiment(write_experiment("bad_entry_seeds", t), builtin_methods());
+                ADD_FAILURE() << "expected ConfigError for " << suite << entry;
+            } catch (const ConfigError& e) {
+                EXPECT_NE(std::string(e.what()).find("integrators[1].seeds"), std::string::npos) << e.what();
+            }
+        }
     }
 }
 
