@@ -39,6 +39,7 @@ void register_run(CLI::App& app)
         std::vector<std::string> force;
         std::string unit;
         bool check = false, merge = false;
+        std::vector<std::string> scenes, integrators;
     };
     auto a = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("run", "Run an experiment suite: simulate, train, roll out, tables, plots (cached stages)");
@@ -50,10 +51,16 @@ void register_run(CLI::App& app)
     CLI::Option* unit = cmd->add_option("--unit", a->unit, "Run one work unit (ids: `latentbench plan`); idempotent");
     CLI::Option* merge = cmd->add_flag("--merge", a->merge,
                                        "Tables, figures and report from the work units' outputs; names every unit missing");
+    cmd->add_option("--scene", a->scenes,
+                    "Run only the scene with this label (repeatable); tables cover the subset, the cache is shared "
+                    "with the whole suite");
+    cmd->add_option("--integrator", a->integrators,
+                    "Run only the [[integrators]] entry with this name (repeatable; full_space runs as configured)");
     check->excludes(unit)->excludes(merge);
     unit->excludes(merge);
     cmd->callback([a] {
-        const ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
+        ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
+        if (!a->scenes.empty() || !a->integrators.empty()) ex = select_subset(ex, a->scenes, a->integrators);
         if (a->check) {
             print_plan(ex, a->output.empty() ? ex.output_dir : a->output);
             return;

@@ -102,6 +102,15 @@ struct ExperimentConfig {
 /// point of a [sweep] is expanded and validated too (errors name the sweep key).
 ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry);
 
+/// A subset of a suite: only the scenes labelled `scenes` and the [[integrators]] entries
+/// named `integrators` (empty: all of either). Units keep their keys and file names, so a
+/// subset run in the suite's run directory shares its cache with the whole suite (e.g. the
+/// paper's method and its supervised baseline first, the rest later). Ablations that lose a
+/// method are left out; the resolved TOML text gains a comment naming the subset.
+/// ConfigError naming an unknown label or name, or a scene left with no method.
+ExperimentConfig select_subset(const ExperimentConfig& ex, const std::vector<std::string>& scenes,
+                               const std::vector<std::string>& integrators);
+
 /// The configurations a suite runs: its sweep points, or the suite itself without [sweep].
 std::vector<const ExperimentConfig*> experiment_points(const ExperimentConfig& ex);
 

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -426,6 +427,71 @@ ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& 
     ex.toml_text = to_toml_string(root);
     expand_sweep(root, path, registry, ex);
     return ex;
+}
+
+namespace {
+
+/// select_subset on one configuration (a suite or a sweep point); `note` is the comment line.
+void keep_subset(ExperimentConfig& ex, const std::set<std::string>& scenes, const std::set<std::string>& integrators,
+                 const std::string& note)
+{
+    std::vector<SceneSpec> kept;
+    for (SceneSpec& s : ex.scenes) {
+        if (!scenes.empty() && !scenes.count(s.label)) continue;
+        if (!integrators.empty()) {
+            std::vector<MethodSpec> methods;
+            for (MethodSpec& m : s.methods)
+                if (integrators.count(m.name)) methods.push_back(std::move(m));
+            if (methods.empty())
+                throw ConfigError(ex.source + ": scene '" + s.label + "' runs none of the selected integrators");
+            s.methods = std::move(methods);
+        }
+        kept.push_back(std::move(s));
+    }
+    ex.scenes = std::move(kept);
+    std::vector<AblationSpec> ablations;
+    for (AblationSpec& a : ex.ablations) {
+        const bool whole = integrators.empty() || std::all_of(a.methods.begin(), a.methods.end(), [&](const std::string& m) {
+                               return integrators.count(m) > 0;
+                           });
+        if (whole) ablations.push_back(std::move(a));
+    }
+    ex.ablations = std::move(ablations);
+    ex.toml_text = note + ex.toml_text;
+}
+
+} // namespace
+
+ExperimentConfig select_subset(const ExperimentConfig& ex, const std::vector<std::string>& scenes,
+                               const std::vector<std::string>& integrators)
+{
+    std::set<std::string> labels, names;
+    for (const SceneSpec& s : ex.scenes) {
+        labels.insert(s.label);
+        for (const MethodSpec& m : s.methods) names.insert(m.name);
+    }
+    auto join_set = [](const std::set<std::string>& v) {
+        std::string out;
+        for (const std::string& x : v) out += (out.empty() ? "" : ", ") + x;
+        return out;
+    };
+    for (const std::string& s : scenes)
+        if (!labels.count(s))
+            throw ConfigError(ex.source + ": no scene is labelled '" + s + "' (labels: " + join_set(labels) + ")");
+    for (const std::string& m : integrators)
+        if (!names.count(m))
+            throw ConfigError(ex.source + ": no [[integrators]] entry is named '" + m + "' (names: " + join_set(names) +
+                              ")");
+    const std::set<std::string> scene_set(scenes.begin(), scenes.end()), method_set(integrators.begin(), integrators.end());
+    std::string note = "# subset run:";
+    if (!scenes.empty()) note += " scenes " + join_set(scene_set) + ";";
+    if (!integrators.empty()) note += " integrators " + join_set(method_set) + ";";
+    note += "\n";
+    ExperimentConfig out = ex;
+    keep_subset(out, scene_set, method_set, note);
+    for (ExperimentConfig& point : out.points) keep_subset(point, scene_set, method_set, note);
+    if (out.scenes.empty()) throw ConfigError(ex.source + ": the subset keeps no scene");
+    return out;
 }
 
 std::vector<const ExperimentConfig*> experiment_points(const ExperimentConfig& ex)

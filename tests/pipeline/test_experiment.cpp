@@ -361,6 +361,39 @@ TEST(Experiment, SeedsFitEveryLearnedMethodOncePerSeed)
     }
 }
 
+// A subset of a suite (`run --scene/--integrator`) shares the suite's run directory and
+// cache: the paper's method first, the rest later, nothing computed twice.
+TEST(Experiment, SubsetRunSharesTheCacheWithTheWholeSuite)
+{
+    set_log_level(LogLevel::Quiet);
+    const std::string path = write_experiment("subset", kTiny);
+    const ExperimentConfig ex = load_experiment(path, builtin_methods());
+    const ExperimentConfig only_ours = select_subset(ex, {}, {"ours"});
+    ASSERT_EQ(only_ours.scenes.size(), 1u);
+    ASSERT_EQ(only_ours.scenes[0].methods.size(), 1u);
+    EXPECT_EQ(only_ours.scenes[0].methods[0].name, "ours");
+    EXPECT_TRUE(only_ours.ablations.empty());  // "supervision" needs sup
+    EXPECT_EQ(select_subset(ex, {}, {"ours", "sup"}).ablations.size(), 1u);
+    EXPECT_NE(only_ours.toml_text.find("# subset run: integrators ours;"), std::string::npos);
+    RunOptions options;
+    options.output_dir = fs::path(path).parent_path().string() + "/run";
+    // simulate, autoencoder, ours, its rollout, full space
+    EXPECT_EQ(run_experiment(only_ours, options).stages_run, 5);
+    const RunResult whole = run_experiment(ex, options);
+    EXPECT_EQ(whole.stages_run, 4);  // sup and pca, fitted and rolled out
+    EXPECT_GE(whole.stages_cached, 5);
+    for (const auto& bad : std::vector<std::pair<std::vector<std::string>, std::vector<std::string>>>{
+             {{"cloth_small"}, {}}, {{}, {"nope"}}}) {
+        try {
+            select_subset(ex, bad.first, bad.second);
+            ADD_FAILURE() << "expected ConfigError";
+        } catch (const ConfigError& e) {
+            const std::string what = e.what();
+            EXPECT_TRUE(what.find("cloth_small") != std::string::npos || what.find("nope") != std::string::npos) << what;
+        }
+    }
+}
+
 long long artefact_flag(const std::string& file, const char* key) { return h5::File::open(file).attribute_int("/", key); }
 
 std::string read_all(const std::string& path)
