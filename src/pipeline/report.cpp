@@ -210,8 +210,15 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
         }
         emit(methods, "methods_" + r.label);
         if (!embeddings.rows.empty()) emit(embeddings, "embedding_" + r.label);
-        for (const AblationSpec& ab : ex.ablations)
-            emit(comparison_table(r, ab.methods, ab.title + " (" + r.label + ")"), "ablation_" + ab.name + "_" + r.label);
+        for (const AblationSpec& ab : ex.ablations) {
+            // Only on scenes that ran every method of the ablation (a scene may run a subset).
+            const bool complete = std::all_of(ab.methods.begin(), ab.methods.end(), [&](const std::string& name) {
+                return std::any_of(r.methods.begin(), r.methods.end(),
+                                   [&](const MethodResult& m) { return m.name == name; });
+            });
+            if (complete)
+                emit(comparison_table(r, ab.methods, ab.title + " (" + r.label + ")"), "ablation_" + ab.name + "_" + r.label);
+        }
     }
     if (ex.paper_tables) {
         Table t1, t2;

@@ -252,6 +252,17 @@ TEST(Report, SeedsGiveAnIntervalOrARangeAndTheBudgetIsStated)
     EXPECT_EQ(cell_of(md_long, rows_long[1], "stable (blow-up)"), "1447 ± 147.7 (1/5 diverged, earliest @1234)");
     // Test window from frame 30: 1204 and 4 × 1470 frames before the horizons.
     EXPECT_EQ(cell_of(md_long, rows_long[1], "frames aggregated"), "1417 ± 147.7");
+
+    // An ablation's table is written only for scenes that ran all of its methods.
+    ExperimentConfig with_ablation;
+    with_ablation.paper_tables = false;
+    with_ablation.ablations.push_back({"supervision", "Supervised vs self-supervised", {"ours", "sup"}});
+    std::filesystem::remove_all(dir);
+    write_tables(with_ablation, {scene_with({five, three})}, dir);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/ablation_supervision_cloth_small.md"));
+    std::filesystem::remove_all(dir);
+    write_tables(with_ablation, {scene_with({five})}, dir);
+    EXPECT_FALSE(std::filesystem::exists(dir + "/ablation_supervision_cloth_small.md"));
 }
 
 } // namespace
