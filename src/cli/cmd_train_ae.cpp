@@ -107,9 +107,11 @@ void register_train_ae(CLI::App& app)
                     long(ae.options().pca_dim), s.epochs_run, s.best_epoch, s.stopped_early ? ", stopped early" : "",
                     s.resumed ? ", resumed" : "", s.best_validation, s.validation_relative_rmse, s.seconds);
         if (s.physics_ran)
-            std::printf("physics fine-tuning: %d epochs, L_recon %.4e -> %.4e m², L_ephys %.6g -> %.6g, %.1f s\n",
+            std::printf("physics fine-tuning: %d epochs, L_recon %.4e -> %.4e m², L_ephys %.6g -> %.6g, %.1f s; "
+                        "validation relative RMSE %.4e before it (held out); the validation frames are among "
+                        "the frames it trains on\n",
                         s.physics_epochs_run, s.physics_recon_before, s.physics_recon_after, s.physics_ephys_before,
-                        s.physics_ephys_after, s.physics_seconds);
+                        s.physics_ephys_after, s.physics_seconds, s.validation_relative_rmse_held_out);
     });
 }
 

@@ -565,8 +565,12 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     static_cast<nn::TrainingLoopSummary&>(summary) = nn::run_training_loop(learner, loop, print);
     // No epoch run: the PCA-initialised network.
     if (summary.best_epoch == 0) summary.best_validation = eval_mse(ae, val_features);
-    if (options.physics_epochs > 0 && !summary.interrupted) finetune_physics(ae, data, options, summary);
-    summary.validation_relative_rmse = ae.relative_rmse(val_positions, val_targets);
+    summary.validation_relative_rmse_held_out = ae.relative_rmse(val_positions, val_targets);
+    summary.validation_relative_rmse = summary.validation_relative_rmse_held_out;
+    if (options.physics_epochs > 0 && !summary.interrupted) {
+        finetune_physics(ae, data, options, summary);
+        summary.validation_relative_rmse = ae.relative_rmse(val_positions, val_targets);
+    }
     summary.seconds = timer.seconds();
     if (options.progress)
         log_info("train-ae %s after %d epochs (best %d): validation MSE %.4e, relative RMSE %.4e, %.1fs",

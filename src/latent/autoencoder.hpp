@@ -64,8 +64,12 @@ struct AutoencoderOptions : nn::TrainingRunOptions {
 /// The shared loop's summary (best_validation: mean squared error per DOF (m²) of the
 /// kept weights; final_loss: the last epoch's training-mode loss) plus the error in metres.
 struct AutoencoderTrainSummary : nn::TrainingLoopSummary {
-    /// Relative RMS reconstruction error on validation frames: RMS(x̂ − x) / bbox diagonal.
+    /// Relative RMS reconstruction error on validation frames: RMS(x̂ − x) / bbox diagonal,
+    /// of the returned autoencoder. After a physics fine-tuning the validation frames are
+    /// not held out from it (it trains on every training frame m ≥ 2, as Tan et al.'s
+    /// stage 1): validation_relative_rmse_held_out is the value before it.
     double validation_relative_rmse = 0.0;
+    double validation_relative_rmse_held_out = 0.0;
     /// Physics fine-tuning (options.physics_epochs > 0): L_recon and L_ephys (unweighted
     /// means over the training frames m ≥ 2) before and after, its epochs and seconds.
     bool physics_ran = false;

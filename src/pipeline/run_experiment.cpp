@@ -230,8 +230,14 @@ private:
                         const AutoencoderTrainSummary s = train_autoencoder(ae, ls.data, ao);
                         ae.set_scene_name(ls.scene.name);
                         ae.save(file);
-                        log_info("%s: autoencoder validation relative RMSE %.3e", u.scene.c_str(),
-                                 s.validation_relative_rmse);
+                        if (s.physics_ran)
+                            log_info("%s: autoencoder validation relative RMSE %.3e before the physics "
+                                     "fine-tuning (held out), %.3e after it (trained on)",
+                                     u.scene.c_str(), s.validation_relative_rmse_held_out,
+                                     s.validation_relative_rmse);
+                        else
+                            log_info("%s: autoencoder validation relative RMSE %.3e", u.scene.c_str(),
+                                     s.validation_relative_rmse);
                     });
         ls.ae = std::make_shared<Autoencoder>(Autoencoder::load(file, ls.data.physics));
     }

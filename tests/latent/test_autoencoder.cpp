@@ -581,6 +581,9 @@ TEST(AutoencoderTraining, PhysicsFineTuningLowersTheEnergyItsReconstructionsStor
         << "L_ephys " << s.physics_ephys_before << " -> " << s.physics_ephys_after;
     EXPECT_TRUE(std::isfinite(s.physics_recon_after));
     EXPECT_TRUE(std::isfinite(s.validation_relative_rmse));
+    // The held-out validation error is the one before the fine-tuning: the plain run's.
+    EXPECT_EQ(s.validation_relative_rmse_held_out, s0.validation_relative_rmse);
+    EXPECT_NE(s.validation_relative_rmse, s.validation_relative_rmse_held_out);
     // The reconstruction training before it is the plain one: same best validation MSE.
     EXPECT_EQ(s.best_validation, s0.best_validation);
     // The fine-tuning changed the networks the rollouts decode with.
