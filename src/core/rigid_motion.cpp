@@ -5,12 +5,19 @@
 
 namespace lb {
 
+namespace {
+
+/// Points whose second singular value is at most this fraction of the first are collinear:
+/// a rotation about their line is undetermined.
+constexpr double kCollinear = 1e-9;
+
+} // namespace
+
 Matrix3d kabsch_rotation(const Matrix3d& H)
 {
     const Eigen::JacobiSVD<Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
     // A rotation about the line through collinear points is undetermined (the SVD
     // completes it arbitrarily): no rotation.
-    constexpr double kCollinear = 1e-9;
     const Vector3d sigma = svd.singularValues();
     if (!(sigma[1] > kCollinear * sigma[0])) return Matrix3d::Identity();
     Matrix3d correction = Matrix3d::Identity();
@@ -28,7 +35,7 @@ bool RestFrame::fixes_rotation() const
 {
     if (m_offsets.cols() < 3) return false;
     const Vector3d s = Eigen::JacobiSVD<Matrix3d>(m_offsets * m_offsets.transpose()).singularValues();
-    return s[1] > 1e-9 * s[0];
+    return s[1] > kCollinear * s[0];
 }
 
 Matrix3d RestFrame::rotation(const double* p) const

@@ -427,7 +427,6 @@ private:
     double m_dofs;
 };
 
-
 /// Mean of L_recon and L_ephys over `samples`, in chunks, without gradients.
 EmbeddingLossParts mean_embedding_parts(EmbeddingEnergyLoss& loss, const std::vector<FrameSample>& samples,
                                         double ephys_weight)
@@ -498,6 +497,7 @@ void finetune_physics(Autoencoder& ae, const Dataset& data, const AutoencoderOpt
                  run.epochs_run, before.recon, after.recon, before.ephys, after.ephys, o.physics_weight,
                  summary.physics_seconds, run.time_limited ? " (time limit)" : "");
 }
+
 } // namespace
 
 AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, const AutoencoderOptions& options)

@@ -3,7 +3,6 @@
 
 #include <string>
 
-
 #include "core/error.hpp"
 #include "core/rigid_motion.hpp"
 
