@@ -20,6 +20,7 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "integrators/trainer.hpp"
+#include "nn/inference_network.hpp"
 #include "paper/scene_defaults.hpp"
 #include "sim/dataset.hpp"
 
@@ -108,7 +109,36 @@ void train_epoch(benchmark::State& state, const std::string& scene_name, bool fl
     state.counters["samples"] = double(s->samples.size());
     state.counters["columns"] = double(runner.samples_per_epoch() * (options.training_noise ? 2 : 1));
     state.counters["batches"] = double(runner.num_batches());
+    const double columns = state.counters["columns"];
+    const double decoder_madds = double(nn::InferenceNetworkD(s->autoencoder->decoder()).multiply_adds());
+    const double integrator_madds = double(nn::InferenceNetworkD(net.network).multiply_adds());
+    state.counters["network_GFLOP"] = 2.0 * columns * 3.0 * (decoder_madds + integrator_madds) * 1e-9;
 }
+
+/// Eigen GEMM throughput on this machine at the paper's decoder width (200 × 200 weights
+/// times 1,024 columns, the columns split over the threads as the frozen decoder's batched
+/// pass splits them). Counter GFLOPS: 2 × multiply-adds per second.
+template <typename Scalar>
+void gemm_rate(benchmark::State& state)
+{
+    using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+    constexpr Index kWidth = 200, kColumns = 1024;
+    const int threads = int(state.range(0));
+    const Matrix W = Matrix::Random(kWidth, kWidth);
+    const Matrix X = Matrix::Random(kWidth, kColumns);
+    Matrix Y(kWidth, kColumns);
+    const Index block = kColumns / threads;
+    for (auto _ : state) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (int t = 0; t < threads; ++t) Y.middleCols(t * block, block).noalias() = W * X.middleCols(t * block, block);
+        benchmark::DoNotOptimize(Y.data());
+        benchmark::ClobberMemory();
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(2.0 * double(kWidth * kWidth * kColumns) * 1e-9,
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK_TEMPLATE(gemm_rate, double)->Name("gemm_rate/double")->Arg(1)->Arg(2)->UseRealTime();
+BENCHMARK_TEMPLATE(gemm_rate, float)->Name("gemm_rate/float")->Arg(1)->Arg(2)->UseRealTime();
 
 #define LB_TRAIN_BENCH(name) \
     BENCHMARK_CAPTURE(train_epoch, name, #name, false)->Unit(benchmark::kMillisecond)->MinTime(2.0)
