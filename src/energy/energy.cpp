@@ -56,7 +56,7 @@ double Energy::add_value_gradient(const VectorXd& x, double weight, VectorXd& g)
         for (int a = 0; a < k; ++a) g.segment<3>(3 * Index(nodes[a])) += weight * Eigen::Map<const Vector3d>(ge + 3 * a);
     };
     double sum = 0.0;
-    if (omp_in_parallel() || n < kParallelElementThreshold) {
+    if (serial_value_gradient()) {
         constexpr int kMaxDofs = 12;
         Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDofs, 1> ge(dofs);
         for (Index e = 0; e < n; ++e) {
@@ -73,6 +73,14 @@ double Energy::add_value_gradient(const VectorXd& x, double weight, VectorXd& g)
     }
     for (Index e = 0; e < n; ++e) scatter(e, local.data() + e * dofs);
     return sum;
+}
+
+bool Energy::serial_value_gradient() const
+{
+    // omp_get_level, not omp_in_parallel: a batch loop run on one thread (`-j 1`) is an
+    // inactive region, and a one-thread "parallel" pass would allocate and fill the
+    // element buffer for nothing, every sample.
+    return omp_get_level() > 0 || omp_get_max_threads() == 1 || num_elements() < kParallelElementThreshold;
 }
 
 VectorXd Energy::gradient(const VectorXd& x) const

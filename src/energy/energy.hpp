@@ -53,8 +53,12 @@ public:
     /// Returns E(x) and adds weight · ∇E(x) to g, in one pass over the elements
     /// (element_value_gradient). Inside an OpenMP parallel region (the training losses
     /// parallelise over the samples of a batch) and for small meshes it runs serially,
-    /// scattering as it goes, and allocates nothing.
-    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const;
+    /// scattering as it goes, and allocates nothing. An energy may override it with the
+    /// same serial pass and its element kernel inlined (ElementEnergy::inlined_value_gradient).
+    virtual double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const;
+    /// True where add_value_gradient runs its serial pass: inside a parallel region (even a
+    /// one-thread one), with one thread available, or below kParallelElementThreshold elements.
+    bool serial_value_gradient() const;
     /// Dense-free sparse Hessian over all 3N DOFs (full, both triangles); for
     /// tests and small problems. Newton uses HessianAssembler instead.
     SparseMatrixd hessian(const VectorXd& x, bool project_psd) const;
@@ -118,6 +122,27 @@ public:
     }
 
 protected:
+    /// add_value_gradient with the element kernel `kernel(e, xe, ge) -> E_e` called
+    /// directly (inlined, no virtual call per element) in the serial pass; the parallel
+    /// pass is Energy's. For overrides of add_value_gradient by energies whose kernel is
+    /// the same code as their local_value_gradient.
+    template <typename Kernel>
+    double inlined_value_gradient(const VectorXd& x, double weight, VectorXd& g, Kernel&& kernel) const
+    {
+        if (!serial_value_gradient()) return Energy::add_value_gradient(x, weight, g);
+        double sum = 0.0;
+        ElementVector ge;
+        const Index n = num_elements();
+        for (Index e = 0; e < n; ++e) {
+            sum += kernel(e, gather(e, x), ge);
+            const int* nodes = element_nodes(e);
+            for (int a = 0; a < K; ++a) {
+                g.template segment<3>(3 * Index(nodes[a])) += weight * ge.template segment<3>(3 * a);
+            }
+        }
+        return sum;
+    }
+
     virtual double local_value(Index e, const ElementVector& xe) const = 0;
     virtual ElementVector local_gradient(Index e, const ElementVector& xe) const = 0;
     virtual ElementMatrix local_hessian(Index e, const ElementVector& xe) const = 0;

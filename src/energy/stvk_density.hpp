@@ -127,6 +127,22 @@ Eigen::Matrix<double, 3 * K, 1> stvk_element_gradient(const DeformationGradient<
     return Eigen::Map<const Eigen::Matrix<double, 3 * K, 1>>(PBt.data());
 }
 
+/// E_e = V ψ(F), with its gradient g_a = V P b_a written to g: the Green strain is formed
+/// once for both (the training losses' pass, Energy::add_value_gradient).
+template <int K, int D>
+double stvk_element_value_gradient(const DeformationGradient<D>& F, const Eigen::Matrix<double, K, D>& B,
+                                   double measure, const LameParameters& lame, Eigen::Matrix<double, 3 * K, 1>& g)
+{
+    const Eigen::Matrix<double, D, D> G = green_strain<D>(F);
+    const double tr = G.trace();
+    Eigen::Matrix<double, D, D> S = 2.0 * lame.mu * G;
+    S.diagonal().array() += lame.lambda * tr;
+    const DeformationGradient<D> P = F * S;
+    const Eigen::Matrix<double, 3, K> PBt = measure * P * B.transpose();
+    g = Eigen::Map<const Eigen::Matrix<double, 3 * K, 1>>(PBt.data());
+    return measure * (lame.mu * G.squaredNorm() + 0.5 * lame.lambda * tr * tr);
+}
+
 /// Element Hessian (3K×3K) of E_e = V ψ(F(x_e)), unprojected.
 template <int K, int D>
 Eigen::Matrix<double, 3 * K, 3 * K> stvk_element_hessian(const DeformationGradient<D>& F,

@@ -54,11 +54,22 @@ TetStVK::ElementVector TetStVK::local_gradient(Index t, const ElementVector& xe)
                                        m_volumes[size_t(t)], m_lame);
 }
 
+double TetStVK::value_gradient_kernel(Index t, const ElementVector& xe, ElementVector& g) const
+{
+    return stvk_element_value_gradient<4, 3>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
+                                                 m_volumes[size_t(t)], m_lame, g);
+}
+
 double TetStVK::local_value_gradient(Index t, const ElementVector& xe, ElementVector& g) const
 {
-    const auto F = deformation_gradient(t, xe);
-    g = stvk_element_gradient<4, 3>(F, m_shape_gradients[size_t(t)], m_volumes[size_t(t)], m_lame);
-    return m_volumes[size_t(t)] * stvk_psi<3>(F, m_lame);
+    return value_gradient_kernel(t, xe, g);
+}
+
+double TetStVK::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    return inlined_value_gradient(x, weight, g, [this](Index t, const ElementVector& xe, ElementVector& ge) {
+        return value_gradient_kernel(t, xe, ge);
+    });
 }
 
 TetStVK::ElementMatrix TetStVK::local_hessian(Index t, const ElementVector& xe) const

@@ -35,6 +35,8 @@ public:
             double youngs, double poisson);
 
     std::string name() const override { return "tet_stvk"; }
+    /// The serial pass with the element kernel inlined (local_value_gradient's code).
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     const LameParameters& lame() const { return m_lame; }
     /// Rest volume V_t (m³).
@@ -52,6 +54,9 @@ protected:
     ElementMatrix local_projected_hessian(Index t, const ElementVector& xe) const override;
 
 private:
+    /// E_e and its gradient: the one kernel of local_value_gradient and add_value_gradient.
+    double value_gradient_kernel(Index t, const ElementVector& xe, ElementVector& g) const;
+
     LameParameters m_lame;
     std::vector<ShapeGradients> m_shape_gradients;
     std::vector<double> m_volumes;
