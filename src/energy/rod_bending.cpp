@@ -82,6 +82,13 @@ double RodBending::local_value_gradient(Index i, const ElementVector& xe, Elemen
     return c * kb.squaredNorm();
 }
 
+double RodBending::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    return inlined_value_gradient(x, weight, g, [this](Index e, const ElementVector& xe, ElementVector& ge) {
+        return RodBending::local_value_gradient(e, xe, ge);  // qualified: not virtual, inlined
+    });
+}
+
 RodBending::ElementMatrix RodBending::local_hessian(Index i, const ElementVector& xe) const
 {
     // E = c κbᵀκb over z = (e0, e1) = S x (S linear, see edge_map):

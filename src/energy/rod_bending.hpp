@@ -31,6 +31,8 @@ public:
                double youngs, double radius);
 
     std::string name() const override { return "rod_bending"; }
+    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// E·I = E·πr⁴/4 (N·m²).
     double bending_stiffness() const { return m_stiffness; }

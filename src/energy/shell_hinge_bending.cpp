@@ -61,6 +61,13 @@ double ShellHingeBending::local_value_gradient(Index h, const ElementVector& xe,
     return m_weights[size_t(h)] * delta * delta;
 }
 
+double ShellHingeBending::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    return inlined_value_gradient(x, weight, g, [this](Index e, const ElementVector& xe, ElementVector& ge) {
+        return ShellHingeBending::local_value_gradient(e, xe, ge);  // qualified: not virtual, inlined
+    });
+}
+
 ShellHingeBending::ElementMatrix ShellHingeBending::local_hessian(Index h, const ElementVector& xe) const
 {
     // E = w (θ − θ̄)²  ⇒  ∇²E = 2w (∇θ ∇θᵀ + (θ − θ̄) ∇²θ), with ∇θ, ∇²θ exact

@@ -28,6 +28,8 @@ public:
                       double youngs, double poisson, double thickness);
 
     std::string name() const override { return "shell_hinge_bending"; }
+    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// k_b = E t³ / (24 (1−ν²)) (N·m).
     double bending_stiffness() const { return m_bending_stiffness; }

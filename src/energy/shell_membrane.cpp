@@ -63,21 +63,16 @@ ShellMembrane::ElementVector ShellMembrane::local_gradient(Index f, const Elemen
                                        m_areas[size_t(f)], m_lame);
 }
 
-double ShellMembrane::value_gradient_kernel(Index e, const ElementVector& xe, ElementVector& g) const
-{
-    return stvk_element_value_gradient<3, 2>(deformation_gradient(e, xe), m_shape_gradients[size_t(e)],
-                                                 m_areas[size_t(e)], m_lame, g);
-}
-
 double ShellMembrane::local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const
 {
-    return value_gradient_kernel(e, xe, g);
+    return stvk_element_value_gradient<3, 2>(deformation_gradient(e, xe), m_shape_gradients[size_t(e)],
+                                             m_areas[size_t(e)], m_lame, g);
 }
 
 double ShellMembrane::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
 {
     return inlined_value_gradient(x, weight, g, [this](Index e, const ElementVector& xe, ElementVector& ge) {
-        return value_gradient_kernel(e, xe, ge);
+        return ShellMembrane::local_value_gradient(e, xe, ge);  // qualified: not virtual, inlined
     });
 }
 

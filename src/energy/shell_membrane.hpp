@@ -29,7 +29,7 @@ public:
                   double youngs, double poisson, double thickness);
 
     std::string name() const override { return "shell_membrane"; }
-    /// The serial pass with the element kernel inlined (local_value_gradient's code).
+    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
     double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// Rest area A_f (m²).
@@ -46,9 +46,6 @@ protected:
     ElementMatrix local_hessian(Index f, const ElementVector& xe) const override;
 
 private:
-    /// E_e and its gradient: the one kernel of local_value_gradient and add_value_gradient.
-    double value_gradient_kernel(Index e, const ElementVector& xe, ElementVector& g) const;
-
     LameParameters m_lame; // plane-stress μ, λ_ps times t
     std::vector<ShapeGradients> m_shape_gradients;
     std::vector<double> m_areas;

@@ -54,21 +54,16 @@ TetStVK::ElementVector TetStVK::local_gradient(Index t, const ElementVector& xe)
                                        m_volumes[size_t(t)], m_lame);
 }
 
-double TetStVK::value_gradient_kernel(Index t, const ElementVector& xe, ElementVector& g) const
-{
-    return stvk_element_value_gradient<4, 3>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
-                                                 m_volumes[size_t(t)], m_lame, g);
-}
-
 double TetStVK::local_value_gradient(Index t, const ElementVector& xe, ElementVector& g) const
 {
-    return value_gradient_kernel(t, xe, g);
+    return stvk_element_value_gradient<4, 3>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
+                                             m_volumes[size_t(t)], m_lame, g);
 }
 
 double TetStVK::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
 {
     return inlined_value_gradient(x, weight, g, [this](Index t, const ElementVector& xe, ElementVector& ge) {
-        return value_gradient_kernel(t, xe, ge);
+        return TetStVK::local_value_gradient(t, xe, ge);  // qualified: not virtual, inlined
     });
 }
 

@@ -35,7 +35,7 @@ public:
             double youngs, double poisson);
 
     std::string name() const override { return "tet_stvk"; }
-    /// The serial pass with the element kernel inlined (local_value_gradient's code).
+    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
     double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     const LameParameters& lame() const { return m_lame; }
@@ -54,9 +54,6 @@ protected:
     ElementMatrix local_projected_hessian(Index t, const ElementVector& xe) const override;
 
 private:
-    /// E_e and its gradient: the one kernel of local_value_gradient and add_value_gradient.
-    double value_gradient_kernel(Index t, const ElementVector& xe, ElementVector& g) const;
-
     LameParameters m_lame;
     std::vector<ShapeGradients> m_shape_gradients;
     std::vector<double> m_volumes;
