@@ -21,8 +21,10 @@ TableCell number(double v, int digits = 3)
 /// How the rows of a method over several sequences were combined (item for captions).
 std::string aggregation_text(const SceneResult& r)
 {
+    // summaries holds every seed's sequences: a row with seeds combines summaries / seeds.
     size_t most = 0;
-    for (const auto& m : r.methods) most = std::max(most, m.summaries.size());
+    for (const auto& m : r.methods)
+        most = std::max(most, m.seeds.empty() ? m.summaries.size() : m.summaries.size() / m.seeds.size());
     if (most <= 1) return "One test sequence per row.";
     return "Rows combine " + std::to_string(most) +
            " sequences: horizons are the worst case (the earliest over the sequences), "
