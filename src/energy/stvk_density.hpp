@@ -53,23 +53,35 @@ Eigen::Matrix<double, D, D> green_strain(const DeformationGradient<D>& F)
     return 0.5 * (F.transpose() * F - Eigen::Matrix<double, D, D>::Identity());
 }
 
+/// ψ = μ ||G||_F² + ½ λ (tr G)² of a Green strain G.
+template <int D>
+double stvk_psi_of_strain(const Eigen::Matrix<double, D, D>& G, const LameParameters& lame)
+{
+    const double tr = G.trace();
+    return lame.mu * G.squaredNorm() + 0.5 * lame.lambda * tr * tr;
+}
+
+/// S = 2μ G + λ tr(G) I of a Green strain G (D×D, symmetric).
+template <int D>
+Eigen::Matrix<double, D, D> stvk_stress_of_strain(const Eigen::Matrix<double, D, D>& G, const LameParameters& lame)
+{
+    Eigen::Matrix<double, D, D> S = 2.0 * lame.mu * G;
+    S.diagonal().array() += lame.lambda * G.trace();
+    return S;
+}
+
 /// ψ(F) = μ ||G||_F² + ½ λ (tr G)².
 template <int D>
 double stvk_psi(const DeformationGradient<D>& F, const LameParameters& lame)
 {
-    const Eigen::Matrix<double, D, D> G = green_strain<D>(F);
-    const double tr = G.trace();
-    return lame.mu * G.squaredNorm() + 0.5 * lame.lambda * tr * tr;
+    return stvk_psi_of_strain<D>(green_strain<D>(F), lame);
 }
 
 /// S = 2μ G + λ tr(G) I (D×D, symmetric).
 template <int D>
 Eigen::Matrix<double, D, D> stvk_second_piola(const DeformationGradient<D>& F, const LameParameters& lame)
 {
-    const Eigen::Matrix<double, D, D> G = green_strain<D>(F);
-    Eigen::Matrix<double, D, D> S = 2.0 * lame.mu * G;
-    S.diagonal().array() += lame.lambda * G.trace();
-    return S;
+    return stvk_stress_of_strain<D>(green_strain<D>(F), lame);
 }
 
 /// P = ∂ψ/∂F = F S (3×D).
@@ -134,13 +146,10 @@ double stvk_element_value_gradient(const DeformationGradient<D>& F, const Eigen:
                                    double measure, const LameParameters& lame, Eigen::Matrix<double, 3 * K, 1>& g)
 {
     const Eigen::Matrix<double, D, D> G = green_strain<D>(F);
-    const double tr = G.trace();
-    Eigen::Matrix<double, D, D> S = 2.0 * lame.mu * G;
-    S.diagonal().array() += lame.lambda * tr;
-    const DeformationGradient<D> P = F * S;
+    const DeformationGradient<D> P = F * stvk_stress_of_strain<D>(G, lame);
     const Eigen::Matrix<double, 3, K> PBt = measure * P * B.transpose();
     g = Eigen::Map<const Eigen::Matrix<double, 3 * K, 1>>(PBt.data());
-    return measure * (lame.mu * G.squaredNorm() + 0.5 * lame.lambda * tr * tr);
+    return measure * stvk_psi_of_strain<D>(G, lame);
 }
 
 /// Element Hessian (3K×3K) of E_e = V ψ(F(x_e)), unprojected.
