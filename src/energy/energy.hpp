@@ -124,8 +124,7 @@ public:
 protected:
     /// add_value_gradient with the element kernel `kernel(e, xe, ge) -> E_e` called
     /// directly (inlined, no virtual call per element) in the serial pass; the parallel
-    /// pass is Energy's. For overrides of add_value_gradient by energies whose kernel is
-    /// the same code as their local_value_gradient.
+    /// pass is Energy's. InlinedElementEnergy's add_value_gradient.
     template <typename Kernel>
     double inlined_value_gradient(const VectorXd& x, double weight, VectorXd& g, Kernel&& kernel) const
     {
@@ -165,6 +164,28 @@ protected:
 
 private:
     Elements m_elements;
+};
+
+/// ElementEnergy<K> whose add_value_gradient runs the serial pass with Derived's
+/// local_value_gradient called directly (inlined, no virtual call per element): the
+/// training losses evaluate value and gradient of every sample this way. Derived is the
+/// final energy class and names this base a friend, so its protected kernel can be called
+/// by its qualified name:
+///   class RodStretching final : public InlinedElementEnergy<RodStretching, 2> {
+///       friend class InlinedElementEnergy<RodStretching, 2>; ...
+template <typename Derived, int K>
+class InlinedElementEnergy : public ElementEnergy<K> {
+public:
+    using ElementEnergy<K>::ElementEnergy;
+    using typename ElementEnergy<K>::ElementVector;
+
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override
+    {
+        const Derived& self = static_cast<const Derived&>(*this);
+        return this->inlined_value_gradient(x, weight, g, [&self](Index e, const ElementVector& xe, ElementVector& ge) {
+            return self.Derived::local_value_gradient(e, xe, ge);  // qualified: not virtual
+        });
+    }
 };
 
 /// A weighted sum of energies, E = Σ_k w_k E_k: the incremental potential of

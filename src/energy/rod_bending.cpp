@@ -24,7 +24,7 @@ Eigen::Matrix<double, 6, 9> edge_map()
 
 RodBending::RodBending(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref<const MatrixXi>& stencils,
                        double youngs, double radius)
-    : ElementEnergy<3>(detail::checked_elements<3>(stencils, rest.rows(), "RodBending"))
+    : InlinedElementEnergy(detail::checked_elements<3>(stencils, rest.rows(), "RodBending"))
 {
     detail::require_positive(youngs, "RodBending", "Young's modulus");
     detail::require_positive(radius, "RodBending", "radius");
@@ -59,34 +59,22 @@ double RodBending::local_value(Index i, const ElementVector& xe) const
 
 RodBending::ElementVector RodBending::local_gradient(Index i, const ElementVector& xe) const
 {
-    // E = c |κb|², c = E·I/l̄:  ∇_z E = 2c Jᵀ κb with J = ∂κb/∂(e0, e1);  ∇_x E = Sᵀ ∇_z E.
-    Matrix36d J;
-    const Vector3d kb =
-        curvature_binormal(xe.segment<3>(3) - xe.segment<3>(0), xe.segment<3>(6) - xe.segment<3>(3), &J);
-    const double c = m_stiffness / m_rest_lengths[size_t(i)];
-    const Eigen::Matrix<double, 6, 1> gz = 2.0 * c * J.transpose() * kb;
     ElementVector g;
-    g << -gz.head<3>(), gz.head<3>() - gz.tail<3>(), gz.tail<3>();
+    RodBending::local_value_gradient(i, xe, g);
     return g;
 }
 
 double RodBending::local_value_gradient(Index i, const ElementVector& xe, ElementVector& g) const
 {
-    // local_value and local_gradient sharing one curvature binormal and its Jacobian.
-    Matrix36d J;
-    const Vector3d kb =
-        curvature_binormal(xe.segment<3>(3) - xe.segment<3>(0), xe.segment<3>(6) - xe.segment<3>(3), &J);
+    // E = c |κb|², c = E·I/l̄:  ∇_z E = 2c Jᵀ κb with J = ∂κb/∂(e0, e1) (a vector-Jacobian
+    // product, J never formed);  ∇_x E = Sᵀ ∇_z E.
+    const Vector3d e0 = xe.segment<3>(3) - xe.segment<3>(0);
+    const Vector3d e1 = xe.segment<3>(6) - xe.segment<3>(3);
+    const Vector3d kb = curvature_binormal(e0, e1);
     const double c = m_stiffness / m_rest_lengths[size_t(i)];
-    const Eigen::Matrix<double, 6, 1> gz = 2.0 * c * J.transpose() * kb;
+    const Eigen::Matrix<double, 6, 1> gz = curvature_binormal_vjp(e0, e1, kb, (2.0 * c) * kb);
     g << -gz.head<3>(), gz.head<3>() - gz.tail<3>(), gz.tail<3>();
     return c * kb.squaredNorm();
-}
-
-double RodBending::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
-{
-    return inlined_value_gradient(x, weight, g, [this](Index e, const ElementVector& xe, ElementVector& ge) {
-        return RodBending::local_value_gradient(e, xe, ge);  // qualified: not virtual, inlined
-    });
 }
 
 RodBending::ElementMatrix RodBending::local_hessian(Index i, const ElementVector& xe) const

@@ -17,7 +17,9 @@
 
 namespace lb {
 
-class RodBending final : public ElementEnergy<3> {
+class RodBending final : public InlinedElementEnergy<RodBending, 3> {
+    friend class InlinedElementEnergy<RodBending, 3>;  // calls local_value_gradient
+
 public:
     /// Largest rest turning measure |κb̄| accepted as straight (dimensionless, 2 tan(φ̄/2)).
     static constexpr double kStraightTolerance = 1e-6;
@@ -31,8 +33,6 @@ public:
                double youngs, double radius);
 
     std::string name() const override { return "rod_bending"; }
-    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
-    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// E·I = E·πr⁴/4 (N·m²).
     double bending_stiffness() const { return m_stiffness; }

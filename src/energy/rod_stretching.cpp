@@ -10,7 +10,7 @@ namespace lb {
 
 RodStretching::RodStretching(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref<const MatrixXi>& edges,
                              double youngs, double radius)
-    : ElementEnergy<2>(detail::checked_elements<2>(edges, rest.rows(), "RodStretching"))
+    : InlinedElementEnergy(detail::checked_elements<2>(edges, rest.rows(), "RodStretching"))
 {
     detail::require_positive(youngs, "RodStretching", "Young's modulus");
     detail::require_positive(radius, "RodStretching", "radius");
@@ -36,14 +36,21 @@ double RodStretching::local_value(Index e, const ElementVector& xe) const
 
 RodStretching::ElementVector RodStretching::local_gradient(Index e, const ElementVector& xe) const
 {
-    // ∂E/∂x1 = k_s (|e| − |ē|)/|ē| · ê = −∂E/∂x0.
+    ElementVector g;
+    RodStretching::local_value_gradient(e, xe, g);
+    return g;
+}
+
+double RodStretching::local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const
+{
+    // ∂E/∂x1 = k_s (|e| − |ē|)/|ē| · ê = −∂E/∂x0; one edge length for both.
     const double rest = m_rest_lengths[size_t(e)];
     const Vector3d edge = xe.segment<3>(3) - xe.segment<3>(0);
     const double length = edge.norm();
-    const Vector3d g1 = m_stiffness * (length - rest) / (rest * length) * edge;
-    ElementVector g;
+    const double stretch = length - rest;
+    const Vector3d g1 = m_stiffness * stretch / (rest * length) * edge;
     g << -g1, g1;
-    return g;
+    return 0.5 * m_stiffness * stretch * stretch / rest;
 }
 
 RodStretching::ElementMatrix RodStretching::local_hessian(Index e, const ElementVector& xe) const

@@ -10,7 +10,9 @@
 
 namespace lb {
 
-class RodStretching final : public ElementEnergy<2> {
+class RodStretching final : public InlinedElementEnergy<RodStretching, 2> {
+    friend class InlinedElementEnergy<RodStretching, 2>;  // calls local_value_gradient
+
 public:
     /// @param rest    N×3 rest positions (m)
     /// @param edges   E×2 vertex indices (non-zero rest length)
@@ -29,6 +31,7 @@ public:
 protected:
     double local_value(Index e, const ElementVector& xe) const override;
     ElementVector local_gradient(Index e, const ElementVector& xe) const override;
+    double local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const override;
     ElementMatrix local_hessian(Index e, const ElementVector& xe) const override;
 
 private:

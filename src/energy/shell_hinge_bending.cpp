@@ -11,7 +11,7 @@ namespace lb {
 ShellHingeBending::ShellHingeBending(const Eigen::Ref<const MatrixX3d>& rest,
                                      const Eigen::Ref<const MatrixXi>& hinges, double youngs,
                                      double poisson, double thickness)
-    : ElementEnergy<4>(detail::checked_elements<4>(hinges, rest.rows(), "ShellHingeBending"))
+    : InlinedElementEnergy(detail::checked_elements<4>(hinges, rest.rows(), "ShellHingeBending"))
 {
     detail::require_positive(youngs, "ShellHingeBending", "Young's modulus");
     detail::require_poisson(poisson, "ShellHingeBending");
@@ -59,13 +59,6 @@ double ShellHingeBending::local_value_gradient(Index h, const ElementVector& xe,
     const double delta = wrap_angle(theta - m_rest_angles[size_t(h)]);
     g = 2.0 * m_weights[size_t(h)] * delta * g_theta;
     return m_weights[size_t(h)] * delta * delta;
-}
-
-double ShellHingeBending::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
-{
-    return inlined_value_gradient(x, weight, g, [this](Index e, const ElementVector& xe, ElementVector& ge) {
-        return ShellHingeBending::local_value_gradient(e, xe, ge);  // qualified: not virtual, inlined
-    });
 }
 
 ShellHingeBending::ElementMatrix ShellHingeBending::local_hessian(Index h, const ElementVector& xe) const

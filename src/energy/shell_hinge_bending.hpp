@@ -17,7 +17,9 @@
 
 namespace lb {
 
-class ShellHingeBending final : public ElementEnergy<4> {
+class ShellHingeBending final : public InlinedElementEnergy<ShellHingeBending, 4> {
+    friend class InlinedElementEnergy<ShellHingeBending, 4>;  // calls local_value_gradient
+
 public:
     /// @param rest       N×3 rest positions (m)
     /// @param hinges     M×4 hinge stencils (v0, v1, v2, v3)
@@ -28,8 +30,6 @@ public:
                       double youngs, double poisson, double thickness);
 
     std::string name() const override { return "shell_hinge_bending"; }
-    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
-    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// k_b = E t³ / (24 (1−ν²)) (N·m).
     double bending_stiffness() const { return m_bending_stiffness; }

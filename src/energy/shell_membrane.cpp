@@ -12,7 +12,7 @@ namespace lb {
 ShellMembrane::ShellMembrane(const Eigen::Ref<const MatrixX3d>& rest,
                              const Eigen::Ref<const MatrixXi>& triangles, double youngs,
                              double poisson, double thickness)
-    : ElementEnergy<3>(detail::checked_elements<3>(triangles, rest.rows(), "ShellMembrane"))
+    : InlinedElementEnergy(detail::checked_elements<3>(triangles, rest.rows(), "ShellMembrane"))
 {
     detail::require_positive(youngs, "ShellMembrane", "Young's modulus");
     detail::require_poisson(poisson, "ShellMembrane");
@@ -67,13 +67,6 @@ double ShellMembrane::local_value_gradient(Index e, const ElementVector& xe, Ele
 {
     return stvk_element_value_gradient<3, 2>(deformation_gradient(e, xe), m_shape_gradients[size_t(e)],
                                              m_areas[size_t(e)], m_lame, g);
-}
-
-double ShellMembrane::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
-{
-    return inlined_value_gradient(x, weight, g, [this](Index e, const ElementVector& xe, ElementVector& ge) {
-        return ShellMembrane::local_value_gradient(e, xe, ge);  // qualified: not virtual, inlined
-    });
 }
 
 ShellMembrane::ElementMatrix ShellMembrane::local_hessian(Index f, const ElementVector& xe) const

@@ -16,7 +16,9 @@
 
 namespace lb {
 
-class ShellMembrane final : public ElementEnergy<3> {
+class ShellMembrane final : public InlinedElementEnergy<ShellMembrane, 3> {
+    friend class InlinedElementEnergy<ShellMembrane, 3>;  // calls local_value_gradient
+
 public:
     using ShapeGradients = Eigen::Matrix<double, 3, 2>;
 
@@ -29,8 +31,6 @@ public:
                   double youngs, double poisson, double thickness);
 
     std::string name() const override { return "shell_membrane"; }
-    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
-    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// Rest area A_f (m²).
     double rest_area(Index f) const { return m_areas[size_t(f)]; }

@@ -10,7 +10,7 @@ namespace lb {
 
 TetStVK::TetStVK(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref<const MatrixXi>& tets,
                  double youngs, double poisson)
-    : ElementEnergy<4>(detail::checked_elements<4>(tets, rest.rows(), "TetStVK"))
+    : InlinedElementEnergy(detail::checked_elements<4>(tets, rest.rows(), "TetStVK"))
 {
     detail::require_positive(youngs, "TetStVK", "Young's modulus");
     detail::require_poisson(poisson, "TetStVK");
@@ -58,13 +58,6 @@ double TetStVK::local_value_gradient(Index t, const ElementVector& xe, ElementVe
 {
     return stvk_element_value_gradient<4, 3>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
                                              m_volumes[size_t(t)], m_lame, g);
-}
-
-double TetStVK::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
-{
-    return inlined_value_gradient(x, weight, g, [this](Index t, const ElementVector& xe, ElementVector& ge) {
-        return TetStVK::local_value_gradient(t, xe, ge);  // qualified: not virtual, inlined
-    });
 }
 
 TetStVK::ElementMatrix TetStVK::local_hessian(Index t, const ElementVector& xe) const

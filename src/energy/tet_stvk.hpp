@@ -22,7 +22,9 @@
 
 namespace lb {
 
-class TetStVK final : public ElementEnergy<4> {
+class TetStVK final : public InlinedElementEnergy<TetStVK, 4> {
+    friend class InlinedElementEnergy<TetStVK, 4>;  // calls local_value_gradient
+
 public:
     using ShapeGradients = Eigen::Matrix<double, 4, 3>;
 
@@ -35,8 +37,6 @@ public:
             double youngs, double poisson);
 
     std::string name() const override { return "tet_stvk"; }
-    /// The serial pass with local_value_gradient inlined (ElementEnergy::inlined_value_gradient).
-    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     const LameParameters& lame() const { return m_lame; }
     /// Rest volume V_t (m³).

@@ -72,6 +72,27 @@ TEST(DihedralAngle, GradientAndHessianMatchFiniteDifferences)
     }
 }
 
+TEST(DihedralAngle, GradientRouteEqualsTheHessianRoutesGradient)
+{
+    // dihedral_angle has two routes: the normals' closed form when only θ and ∇θ are asked
+    // for (the training losses' pass) and the (e, u, v) route with the Hessian. They must
+    // give one θ and one ∇θ, to round-off, including near-flat and near-folded hinges.
+    Rng rng(29);
+    for (double fold : {0.0, 1e-7, 0.3, -1.2, 2.9, -3.1}) {
+        for (int trial = 0; trial < 5; ++trial) {
+            HingeVector xe = folded_hinge(fold);
+            xe += HingeVector::NullaryExpr([&] { return rng.uniform(-0.2, 0.2); });
+            HingeVector g_fast, g_full;
+            HingeMatrix H;
+            const double theta_fast = dihedral_angle(xe, &g_fast, nullptr);
+            const double theta_full = dihedral_angle(xe, &g_full, &H);
+            EXPECT_NEAR(theta_fast, theta_full, 1e-14) << "fold " << fold;
+            EXPECT_NEAR(theta_fast, dihedral_angle(xe), 0.0) << "fold " << fold;
+            EXPECT_LT((g_fast - g_full).norm(), 1e-13 * g_full.norm()) << "fold " << fold << ", trial " << trial;
+        }
+    }
+}
+
 TEST(DihedralAngle, WrapAngleMapsIntoHalfOpenInterval)
 {
     EXPECT_NEAR(wrap_angle(0.3), 0.3, 1e-15);
@@ -79,6 +100,11 @@ TEST(DihedralAngle, WrapAngleMapsIntoHalfOpenInterval)
     EXPECT_NEAR(wrap_angle(-0.3 - 4 * M_PI), -0.3, 1e-14);
     EXPECT_NEAR(wrap_angle(3 * M_PI / 2), -M_PI / 2, 1e-14);
     EXPECT_NEAR(wrap_angle(-M_PI), M_PI, 1e-14);
+    // Below 2π in magnitude (a difference of two angles in (−π, π]) it only adds or
+    // subtracts one turn.
+    EXPECT_EQ(wrap_angle(M_PI + 0.25), M_PI + 0.25 - 2 * M_PI);
+    EXPECT_EQ(wrap_angle(-M_PI - 0.25), -M_PI - 0.25 + 2 * M_PI);
+    EXPECT_EQ(wrap_angle(M_PI), M_PI);
 }
 
 } // namespace

@@ -60,6 +60,11 @@ TEST(RodCurvature, JacobianAndContractedHessianMatchFiniteDifferences)
             curvature_binormal(y.head<3>(), y.tail<3>(), &Jy);
             return VectorXd(Jy.transpose() * w);
         };
+        // The vector-Jacobian product without J is Jᵀw.
+        const Vector3d kb = curvature_binormal(e0, e1);
+        EXPECT_LT((curvature_binormal_vjp(e0, e1, kb, w) - J.transpose() * w).norm(),
+                  1e-14 * (J.norm() * w.norm()))
+            << "trial " << trial;
         const Matrix6d H = curvature_binormal_contracted_hessian(e0, e1, w);
         EXPECT_TRUE(check_jacobian(Jt_w, MatrixXd(H), z, opt, "w . d2kb/dz2")) << "trial " << trial;
         EXPECT_LT((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff());
