@@ -17,7 +17,11 @@ struct Case {
     const char* scene;
     /// Bound on max_{t,i∈B} |x_i − x*_i| relative to the bounding-box diagonal: 2%, a
     /// fifth of the stable-horizon threshold. Cloth and solids hold the boundary only
-    /// through the penalty (w_bc = 1e5) of the loss; measured: cantilever 1.0%, cloth 0.02%.
+    /// through the penalty (w_bc = 1e5) of the loss. The cantilever's largest violation is
+    /// a transient in the first three predicted frames (the release from rest, the frames
+    /// its 4-dimensional autoencoder reconstructs worst); measured on an AMD EPYC
+    /// (AVX-512), autoencoder and integrator seeds 0, 1, 2: 0.49%, 1.8%, 0.81% (test
+    /// window 0.06–0.24%); cloth 0.02%.
     double max_bc_violation;
 };
 
@@ -43,6 +47,10 @@ TEST_P(LongRollout, SelfSupervisedStaysStableAndOnTheBoundary)
     ao.batch_size = 64;
     ao.learning_rate = 1e-3;
     ao.progress = false;
+    // All 800 epochs: early stopping on the 10 validation frames (every 10th training frame)
+    // stopped seeds 0 and 1 early on that machine, and their release transient then reached
+    // 6.8% and 7.3% of the diagonal (the same code had measured 1.0% on another CPU).
+    ao.patience = 0;
     auto ae = std::make_shared<Autoencoder>(data.physics, ao, 0);
     train_autoencoder(*ae, data, ao);
 
