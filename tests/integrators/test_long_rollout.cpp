@@ -20,7 +20,7 @@ struct Case {
     /// through the penalty (w_bc = 1e5) of the loss. The cantilever's largest violation is
     /// a transient in the first three predicted frames (the release from rest, the frames
     /// its 4-dimensional autoencoder reconstructs worst); measured on an AMD EPYC
-    /// (AVX-512), autoencoder and integrator seeds 0, 1, 2: 0.49%, 1.8%, 0.81% (test
+    /// (AVX-512), autoencoder and integrator seeds 0, 1, 2: 0.48%, 1.8%, 0.80% (test
     /// window 0.06–0.24%); cloth 0.02%.
     double max_bc_violation;
 };
@@ -49,7 +49,7 @@ TEST_P(LongRollout, SelfSupervisedStaysStableAndOnTheBoundary)
     ao.progress = false;
     // All 800 epochs: early stopping on the 10 validation frames (every 10th training frame)
     // stopped seeds 0 and 1 early on that machine, and their release transient then reached
-    // 6.8% and 7.3% of the diagonal (the same code had measured 1.0% on another CPU).
+    // 6.7% and 7.2% of the diagonal (the same code had measured 1.0% on another CPU).
     ao.patience = 0;
     auto ae = std::make_shared<Autoencoder>(data.physics, ao, 0);
     train_autoencoder(*ae, data, ao);
