@@ -54,7 +54,7 @@ public:
     /// (element_value_gradient). Inside an OpenMP parallel region (the training losses
     /// parallelise over the samples of a batch) and for small meshes it runs serially,
     /// scattering as it goes, and allocates nothing. An energy may override it with the
-    /// same serial pass and its element kernel inlined (ElementEnergy::inlined_value_gradient).
+    /// same serial pass and its element kernel inlined (InlinedElementEnergy).
     virtual double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const;
     /// True where add_value_gradient runs its serial pass: inside a parallel region (even a
     /// one-thread one), with one thread available, or below kParallelElementThreshold elements.
@@ -122,26 +122,6 @@ public:
     }
 
 protected:
-    /// add_value_gradient with the element kernel `kernel(e, xe, ge) -> E_e` called
-    /// directly (inlined, no virtual call per element) in the serial pass; the parallel
-    /// pass is Energy's. InlinedElementEnergy's add_value_gradient.
-    template <typename Kernel>
-    double inlined_value_gradient(const VectorXd& x, double weight, VectorXd& g, Kernel&& kernel) const
-    {
-        if (!serial_value_gradient()) return Energy::add_value_gradient(x, weight, g);
-        double sum = 0.0;
-        ElementVector ge;
-        const Index n = num_elements();
-        for (Index e = 0; e < n; ++e) {
-            sum += kernel(e, gather(e, x), ge);
-            const int* nodes = element_nodes(e);
-            for (int a = 0; a < K; ++a) {
-                g.template segment<3>(3 * Index(nodes[a])) += weight * ge.template segment<3>(3 * a);
-            }
-        }
-        return sum;
-    }
-
     virtual double local_value(Index e, const ElementVector& xe) const = 0;
     virtual ElementVector local_gradient(Index e, const ElementVector& xe) const = 0;
     virtual ElementMatrix local_hessian(Index e, const ElementVector& xe) const = 0;
@@ -179,12 +159,23 @@ public:
     using ElementEnergy<K>::ElementEnergy;
     using typename ElementEnergy<K>::ElementVector;
 
+    /// The serial pass with Derived::local_value_gradient called directly; the parallel pass
+    /// is Energy's.
     double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override
     {
+        if (!this->serial_value_gradient()) return Energy::add_value_gradient(x, weight, g);
         const Derived& self = static_cast<const Derived&>(*this);
-        return this->inlined_value_gradient(x, weight, g, [&self](Index e, const ElementVector& xe, ElementVector& ge) {
-            return self.Derived::local_value_gradient(e, xe, ge);  // qualified: not virtual
-        });
+        double sum = 0.0;
+        ElementVector ge;
+        const Index n = this->num_elements();
+        for (Index e = 0; e < n; ++e) {
+            sum += self.Derived::local_value_gradient(e, this->gather(e, x), ge);  // qualified: not virtual
+            const int* nodes = this->element_nodes(e);
+            for (int a = 0; a < K; ++a) {
+                g.template segment<3>(3 * Index(nodes[a])) += weight * ge.template segment<3>(3 * a);
+            }
+        }
+        return sum;
     }
 };
 
