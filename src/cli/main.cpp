@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli/commands.hpp"
+#include "core/allocator.hpp"
 #include "core/error.hpp"
 #include "core/limits.hpp"
 #include "core/log.hpp"
@@ -32,6 +33,7 @@ void ensure_thread_environment(char** argv)
 int main(int argc, char** argv)
 {
     ensure_thread_environment(argv);
+    lb::keep_freed_memory();
     CLI::App app{"latentbench: latent-space integrators for deformable simulation, benchmarked"};
     app.require_subcommand(1);
     bool quiet = false, verbose = false;

@@ -42,6 +42,18 @@ void DirichletPenalty::set_targets(const Eigen::Ref<const MatrixX3d>& targets)
     m_targets = targets;
 }
 
+double DirichletPenalty::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    double sum = 0.0;
+    for (size_t b = 0; b < m_indices.size(); ++b) {
+        const Index i = 3 * Index(m_indices[b]);
+        const Vector3d d = x.segment<3>(i) - m_targets.row(Index(b)).transpose();
+        sum += d.squaredNorm();
+        g.segment<3>(i) += (2.0 * weight * m_weight) * d;
+    }
+    return m_weight * sum;
+}
+
 double DirichletPenalty::local_value(Index b, const ElementVector& xe) const
 {
     return m_weight * (xe - m_targets.row(b).transpose()).squaredNorm();

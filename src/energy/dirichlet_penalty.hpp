@@ -21,6 +21,9 @@ public:
     DirichletPenalty(std::vector<int> indices, double weight = kDefaultWeight);
 
     std::string name() const override { return "dirichlet_penalty"; }
+    /// One loop over the boundary vertices (no per-vertex call): the training losses
+    /// evaluate it once per sample.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// @param targets  B×3 prescribed positions x*, row b for indices[b]
     void set_targets(const Eigen::Ref<const MatrixX3d>& targets);

@@ -19,6 +19,9 @@ public:
 
     std::string name() const override { return "gravity"; }
     bool has_zero_hessian() const override { return true; }
+    /// One vectorised pass over the whole state (no per-vertex call): the training losses
+    /// evaluate it once per sample.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     const Vector3d& gravity() const { return m_gravity; }
     const VectorXd& masses() const { return m_masses; }
@@ -31,6 +34,7 @@ protected:
 private:
     VectorXd m_masses;
     Vector3d m_gravity;
+    VectorXd m_weights;  ///< m_i g per vertex, xyz interleaved (3N): E = −m_weights · x
 };
 
 } // namespace lb

@@ -17,6 +17,9 @@ public:
     InertiaEnergy(VectorXd masses, double dt);
 
     std::string name() const override { return "inertia"; }
+    /// One vectorised pass over the whole state (no per-vertex call): the training losses
+    /// evaluate it once per sample.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// @param x_tilde  3N inertial target 2 x_{t−1} − x_{t−2}, xyz interleaved
     void set_x_tilde(const VectorXd& x_tilde);
@@ -33,6 +36,7 @@ private:
     VectorXd m_masses;
     double m_dt;
     double m_inv_dt2;
+    VectorXd m_dof_weights;  ///< m_i / h² per DOF (3N)
     VectorXd m_x_tilde;
 };
 

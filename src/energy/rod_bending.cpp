@@ -20,11 +20,30 @@ Eigen::Matrix<double, 6, 9> edge_map()
     S.block<3, 3>(3, 6) = I;
     return S;
 }
+
+/// E = c |κb|² of one stencil (p = {c}) and its gradient: ∇_z E = 2c Jᵀκb over z = (e0, e1)
+/// (curvature_binormal_vjp, J never formed), ∇_x E = Sᵀ ∇_z E. One SIMD lane of the training
+/// pass, or one element (local_value_gradient).
+const auto kBendingKernel = [](const double (&x)[3][3], const double (&p)[1], double (&g)[3][3]) {
+    double e0[3], e1[3], kb[3], gz[6];
+    for (int i = 0; i < 3; ++i) {
+        e0[i] = x[1][i] - x[0][i];
+        e1[i] = x[2][i] - x[1][i];
+    }
+    const double kk = curvature_binormal_vjp(e0, e1, 2.0 * p[0], kb, gz);
+    for (int i = 0; i < 3; ++i) {
+        g[0][i] = -gz[i];
+        g[1][i] = gz[i] - gz[3 + i];
+        g[2][i] = gz[3 + i];
+    }
+    return p[0] * kk;
+};
+
 } // namespace
 
 RodBending::RodBending(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref<const MatrixXi>& stencils,
                        double youngs, double radius)
-    : InlinedElementEnergy(detail::checked_elements<3>(stencils, rest.rows(), "RodBending"))
+    : ElementEnergy(detail::checked_elements<3>(stencils, rest.rows(), "RodBending"))
 {
     detail::require_positive(youngs, "RodBending", "Young's modulus");
     detail::require_positive(radius, "RodBending", "radius");
@@ -48,6 +67,14 @@ RodBending::RodBending(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref
         }
         m_rest_lengths[size_t(i)] = e0.norm() + e1.norm();
     }
+    m_lanes = ElementLanes<3, 1>(num_elements(), elements().data(),
+                                 [&](Index i) { return ElementLanes<3, 1>::Params{m_stiffness / m_rest_lengths[size_t(i)]}; });
+}
+
+double RodBending::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    if (!serial_value_gradient()) return Energy::add_value_gradient(x, weight, g);
+    return m_lanes.add_value_gradient(x, weight, g, kBendingKernel);
 }
 
 double RodBending::local_value(Index i, const ElementVector& xe) const
@@ -66,15 +93,7 @@ RodBending::ElementVector RodBending::local_gradient(Index i, const ElementVecto
 
 double RodBending::local_value_gradient(Index i, const ElementVector& xe, ElementVector& g) const
 {
-    // E = c |κb|², c = E·I/l̄:  ∇_z E = 2c Jᵀ κb with J = ∂κb/∂(e0, e1) (a vector-Jacobian
-    // product, J never formed);  ∇_x E = Sᵀ ∇_z E.
-    const Vector3d e0 = xe.segment<3>(3) - xe.segment<3>(0);
-    const Vector3d e1 = xe.segment<3>(6) - xe.segment<3>(3);
-    const Vector3d kb = curvature_binormal(e0, e1);
-    const double c = m_stiffness / m_rest_lengths[size_t(i)];
-    const Eigen::Matrix<double, 6, 1> gz = curvature_binormal_vjp(e0, e1, kb, (2.0 * c) * kb);
-    g << -gz.head<3>(), gz.head<3>() - gz.tail<3>(), gz.tail<3>();
-    return c * kb.squaredNorm();
+    return ElementLanes<3, 1>::evaluate(xe, {m_stiffness / m_rest_lengths[size_t(i)]}, g, kBendingKernel);
 }
 
 RodBending::ElementMatrix RodBending::local_hessian(Index i, const ElementVector& xe) const

@@ -13,13 +13,12 @@
 // leading order (the end vertices carry no term): 0.990 for n = 100.
 #include <vector>
 
+#include "energy/element_lanes.hpp"
 #include "energy/energy.hpp"
 
 namespace lb {
 
-class RodBending final : public InlinedElementEnergy<RodBending, 3> {
-    friend class InlinedElementEnergy<RodBending, 3>;  // calls local_value_gradient
-
+class RodBending final : public ElementEnergy<3> {
 public:
     /// Largest rest turning measure |κb̄| accepted as straight (dimensionless, 2 tan(φ̄/2)).
     static constexpr double kStraightTolerance = 1e-6;
@@ -33,6 +32,9 @@ public:
                double youngs, double radius);
 
     std::string name() const override { return "rod_bending"; }
+    /// The serial pass (inside the training losses' batch loop) vectorised across elements
+    /// (energy/element_lanes.hpp); the parallel pass is Energy's.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// E·I = E·πr⁴/4 (N·m²).
     double bending_stiffness() const { return m_stiffness; }
@@ -48,6 +50,7 @@ protected:
 private:
     double m_stiffness = 0.0;
     std::vector<double> m_rest_lengths;
+    ElementLanes<3, 1> m_lanes;  ///< the stencils with c_i = E·I/l̄_i, blocked for add_value_gradient
 };
 
 } // namespace lb

@@ -26,19 +26,6 @@ Vector3d curvature_binormal(const Vector3d& e0, const Vector3d& e1, Matrix36d* j
     return kb;
 }
 
-Eigen::Matrix<double, 6, 1> curvature_binormal_vjp(const Vector3d& e0, const Vector3d& e1, const Vector3d& kb,
-                                                   const Vector3d& w)
-{
-    // Jᵀw of the Jacobian above, block by block: [a]×ᵀ w = w × a.
-    const double l0 = e0.norm(), l1 = e1.norm();
-    const double d = l0 * l1 + e0.dot(e1);
-    const double kw = kb.dot(w);
-    Eigen::Matrix<double, 6, 1> out;
-    out.head<3>() = (2.0 * e1.cross(w) - kw * ((l1 / l0) * e0 + e1)) / d;
-    out.tail<3>() = (2.0 * w.cross(e0) - kw * ((l0 / l1) * e1 + e0)) / d;
-    return out;
-}
-
 Matrix6d curvature_binormal_contracted_hessian(const Vector3d& e0, const Vector3d& e1, const Vector3d& w)
 {
     // f = w·κb = 2p/d with p = w·(e0 × e1), d = |e0||e1| + e0·e1. Chain rule:

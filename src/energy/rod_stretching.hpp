@@ -6,13 +6,12 @@
 //   mesh      E = Σ_e E_e
 #include <vector>
 
+#include "energy/element_lanes.hpp"
 #include "energy/energy.hpp"
 
 namespace lb {
 
-class RodStretching final : public InlinedElementEnergy<RodStretching, 2> {
-    friend class InlinedElementEnergy<RodStretching, 2>;  // calls local_value_gradient
-
+class RodStretching final : public ElementEnergy<2> {
 public:
     /// @param rest    N×3 rest positions (m)
     /// @param edges   E×2 vertex indices (non-zero rest length)
@@ -22,6 +21,9 @@ public:
                   double youngs, double radius);
 
     std::string name() const override { return "rod_stretching"; }
+    /// The serial pass (inside the training losses' batch loop) vectorised across elements
+    /// (energy/element_lanes.hpp); the parallel pass is Energy's.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// k_s = E·πr² (N).
     double stretching_stiffness() const { return m_stiffness; }
@@ -37,6 +39,7 @@ protected:
 private:
     double m_stiffness = 0.0;
     std::vector<double> m_rest_lengths;
+    ElementLanes<2, 2> m_lanes;  ///< the edges with (k_s, |ē|), blocked for add_value_gradient
 };
 
 } // namespace lb

@@ -12,7 +12,7 @@ namespace lb {
 ShellMembrane::ShellMembrane(const Eigen::Ref<const MatrixX3d>& rest,
                              const Eigen::Ref<const MatrixXi>& triangles, double youngs,
                              double poisson, double thickness)
-    : InlinedElementEnergy(detail::checked_elements<3>(triangles, rest.rows(), "ShellMembrane"))
+    : ElementEnergy(detail::checked_elements<3>(triangles, rest.rows(), "ShellMembrane"))
 {
     detail::require_positive(youngs, "ShellMembrane", "Young's modulus");
     detail::require_poisson(poisson, "ShellMembrane");
@@ -45,6 +45,7 @@ ShellMembrane::ShellMembrane(const Eigen::Ref<const MatrixX3d>& rest,
         B.row(0) = -Dm_inv.colwise().sum();
         m_areas[size_t(f)] = area;
     }
+    m_lanes = StvkLanes<3, 2>(elements().data(), m_shape_gradients, m_areas, m_lame);
 }
 
 Eigen::Matrix<double, 3, 2> ShellMembrane::deformation_gradient(Index f, const ElementVector& xe) const
@@ -65,8 +66,7 @@ ShellMembrane::ElementVector ShellMembrane::local_gradient(Index f, const Elemen
 
 double ShellMembrane::local_value_gradient(Index e, const ElementVector& xe, ElementVector& g) const
 {
-    return stvk_element_value_gradient<3, 2>(deformation_gradient(e, xe), m_shape_gradients[size_t(e)],
-                                             m_areas[size_t(e)], m_lame, g);
+    return StvkLanes<3, 2>::evaluate(xe, m_shape_gradients[size_t(e)], m_areas[size_t(e)], m_lame, g);
 }
 
 ShellMembrane::ElementMatrix ShellMembrane::local_hessian(Index f, const ElementVector& xe) const
@@ -75,6 +75,12 @@ ShellMembrane::ElementMatrix ShellMembrane::local_hessian(Index f, const Element
     // chain rule is derived above stvk_element_hessian (energy/stvk_density.hpp).
     return stvk_element_hessian<3, 2>(deformation_gradient(f, xe), m_shape_gradients[size_t(f)],
                                       m_areas[size_t(f)], m_lame);
+}
+
+double ShellMembrane::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    if (!serial_value_gradient()) return Energy::add_value_gradient(x, weight, g);
+    return m_lanes.add_value_gradient(x, weight, g);
 }
 
 } // namespace lb

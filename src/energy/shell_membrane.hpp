@@ -13,11 +13,11 @@
 
 #include "energy/energy.hpp"
 #include "energy/stvk_density.hpp"
+#include "energy/stvk_lanes.hpp"
 
 namespace lb {
 
-class ShellMembrane final : public InlinedElementEnergy<ShellMembrane, 3> {
-    friend class InlinedElementEnergy<ShellMembrane, 3>;  // calls local_value_gradient
+class ShellMembrane final : public ElementEnergy<3> {
 
 public:
     using ShapeGradients = Eigen::Matrix<double, 3, 2>;
@@ -31,6 +31,9 @@ public:
                   double youngs, double poisson, double thickness);
 
     std::string name() const override { return "shell_membrane"; }
+    /// The serial pass (inside the training losses' batch loop) vectorised across elements
+    /// (energy/stvk_lanes.hpp); the parallel pass is Energy's.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// Rest area A_f (m²).
     double rest_area(Index f) const { return m_areas[size_t(f)]; }
@@ -49,6 +52,7 @@ private:
     LameParameters m_lame; // plane-stress μ, λ_ps times t
     std::vector<ShapeGradients> m_shape_gradients;
     std::vector<double> m_areas;
+    StvkLanes<3, 2> m_lanes;  ///< the same elements, blocked for add_value_gradient
 };
 
 } // namespace lb

@@ -17,6 +17,7 @@
 // For D = 3 the file also gives the analytic eigensystem of ∂P/∂F and, from it, a
 // cheap PSD projection of the element Hessian (see "Analytic eigensystem" below).
 #include <Eigen/Core>
+#include <array>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <cmath>
@@ -139,17 +140,64 @@ Eigen::Matrix<double, 3 * K, 1> stvk_element_gradient(const DeformationGradient<
     return Eigen::Map<const Eigen::Matrix<double, 3 * K, 1>>(PBt.data());
 }
 
-/// E_e = V ψ(F), with its gradient g_a = V P b_a written to g: the Green strain is formed
-/// once for both (the training losses' pass, Energy::add_value_gradient).
+/// The parameters of a linear element for stvk_lane_value_gradient (ElementLanes): the K×D
+/// shape gradients row by row (p[D a + d] = b_a(d)), then the rest measure V.
 template <int K, int D>
-double stvk_element_value_gradient(const DeformationGradient<D>& F, const Eigen::Matrix<double, K, D>& B,
-                                   double measure, const LameParameters& lame, Eigen::Matrix<double, 3 * K, 1>& g)
+std::array<double, K * D + 1> stvk_lane_params(const Eigen::Matrix<double, K, D>& B, double measure)
 {
-    const Eigen::Matrix<double, D, D> G = green_strain<D>(F);
-    const DeformationGradient<D> P = F * stvk_stress_of_strain<D>(G, lame);
-    const Eigen::Matrix<double, 3, K> PBt = measure * P * B.transpose();
-    g = Eigen::Map<const Eigen::Matrix<double, 3 * K, 1>>(PBt.data());
-    return measure * stvk_psi_of_strain<D>(G, lame);
+    std::array<double, K * D + 1> p{};
+    for (int a = 0; a < K; ++a) {
+        for (int d = 0; d < D; ++d) p[std::size_t(D * a + d)] = B(a, d);
+    }
+    p[K * D] = measure;
+    return p;
+}
+
+/// E_e = V ψ(F) with its gradient g_a = V P b_a, the Green strain formed once for both, on
+/// plain arrays: one SIMD lane of ElementLanes (the training losses' pass) or, through
+/// ElementLanes::evaluate, one element (local_value_gradient).
+template <int K, int D>
+inline double stvk_lane_value_gradient(const double (&x)[K][3], const double (&p)[K * D + 1],
+                                       const LameParameters& lame, double (&g)[K][3])
+{
+    double F[3][D] = {};
+    for (int a = 0; a < K; ++a) {
+        for (int i = 0; i < 3; ++i) {
+            for (int d = 0; d < D; ++d) F[i][d] += x[a][i] * p[D * a + d];
+        }
+    }
+    double G[D][D];
+    double trace = 0.0, squared = 0.0;
+    for (int d = 0; d < D; ++d) {
+        for (int e = 0; e < D; ++e) {
+            double ftf = 0.0;
+            for (int i = 0; i < 3; ++i) ftf += F[i][d] * F[i][e];
+            G[d][e] = 0.5 * (ftf - (d == e ? 1.0 : 0.0));
+            squared += G[d][e] * G[d][e];
+        }
+        trace += G[d][d];
+    }
+    const double v = p[K * D];
+    double S[D][D];
+    for (int d = 0; d < D; ++d) {
+        for (int e = 0; e < D; ++e) S[d][e] = 2.0 * lame.mu * G[d][e] + (d == e ? lame.lambda * trace : 0.0);
+    }
+    double VP[3][D];
+    for (int i = 0; i < 3; ++i) {
+        for (int d = 0; d < D; ++d) {
+            double sum = 0.0;
+            for (int e = 0; e < D; ++e) sum += F[i][e] * S[e][d];
+            VP[i][d] = v * sum;
+        }
+    }
+    for (int a = 0; a < K; ++a) {
+        for (int i = 0; i < 3; ++i) {
+            double sum = 0.0;
+            for (int d = 0; d < D; ++d) sum += VP[i][d] * p[D * a + d];
+            g[a][i] = sum;
+        }
+    }
+    return v * (lame.mu * squared + 0.5 * lame.lambda * trace * trace);
 }
 
 /// Element Hessian (3K×3K) of E_e = V ψ(F(x_e)), unprojected.

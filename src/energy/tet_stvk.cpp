@@ -10,7 +10,7 @@ namespace lb {
 
 TetStVK::TetStVK(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref<const MatrixXi>& tets,
                  double youngs, double poisson)
-    : InlinedElementEnergy(detail::checked_elements<4>(tets, rest.rows(), "TetStVK"))
+    : ElementEnergy(detail::checked_elements<4>(tets, rest.rows(), "TetStVK"))
 {
     detail::require_positive(youngs, "TetStVK", "Young's modulus");
     detail::require_poisson(poisson, "TetStVK");
@@ -36,6 +36,7 @@ TetStVK::TetStVK(const Eigen::Ref<const MatrixX3d>& rest, const Eigen::Ref<const
         B.row(0) = -Dm_inv.colwise().sum();
         m_volumes[size_t(t)] = det / 6.0;
     }
+    m_lanes = StvkLanes<4, 3>(elements().data(), m_shape_gradients, m_volumes, m_lame);
 }
 
 Matrix3d TetStVK::deformation_gradient(Index t, const ElementVector& xe) const
@@ -56,8 +57,7 @@ TetStVK::ElementVector TetStVK::local_gradient(Index t, const ElementVector& xe)
 
 double TetStVK::local_value_gradient(Index t, const ElementVector& xe, ElementVector& g) const
 {
-    return stvk_element_value_gradient<4, 3>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
-                                             m_volumes[size_t(t)], m_lame, g);
+    return StvkLanes<4, 3>::evaluate(xe, m_shape_gradients[size_t(t)], m_volumes[size_t(t)], m_lame, g);
 }
 
 TetStVK::ElementMatrix TetStVK::local_hessian(Index t, const ElementVector& xe) const
@@ -72,6 +72,12 @@ TetStVK::ElementMatrix TetStVK::local_projected_hessian(Index t, const ElementVe
     // V Jᵀ (∂P/∂F)₊ J from the analytic eigensystem of ∂P/∂F: see stvk_element_projected_hessian.
     return stvk_element_projected_hessian<4>(deformation_gradient(t, xe), m_shape_gradients[size_t(t)],
                                              m_volumes[size_t(t)], m_lame);
+}
+
+double TetStVK::add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const
+{
+    if (!serial_value_gradient()) return Energy::add_value_gradient(x, weight, g);
+    return m_lanes.add_value_gradient(x, weight, g);
 }
 
 } // namespace lb

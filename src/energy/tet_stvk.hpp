@@ -19,12 +19,11 @@
 
 #include "energy/energy.hpp"
 #include "energy/stvk_density.hpp"
+#include "energy/stvk_lanes.hpp"
 
 namespace lb {
 
-class TetStVK final : public InlinedElementEnergy<TetStVK, 4> {
-    friend class InlinedElementEnergy<TetStVK, 4>;  // calls local_value_gradient
-
+class TetStVK final : public ElementEnergy<4> {
 public:
     using ShapeGradients = Eigen::Matrix<double, 4, 3>;
 
@@ -37,6 +36,9 @@ public:
             double youngs, double poisson);
 
     std::string name() const override { return "tet_stvk"; }
+    /// The serial pass (inside the training losses' batch loop) vectorised across elements
+    /// (energy/stvk_lanes.hpp); the parallel pass is Energy's.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     const LameParameters& lame() const { return m_lame; }
     /// Rest volume V_t (m³).
@@ -57,6 +59,7 @@ private:
     LameParameters m_lame;
     std::vector<ShapeGradients> m_shape_gradients;
     std::vector<double> m_volumes;
+    StvkLanes<4, 3> m_lanes;  ///< the same elements, blocked for add_value_gradient
 };
 
 } // namespace lb

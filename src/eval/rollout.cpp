@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "core/log.hpp"
+#include "core/parallel.hpp"
 #include "io/hdf5.hpp"
 
 namespace lb {
@@ -74,6 +75,7 @@ RolloutResult rollout(Integrator& integrator, const PhysicsModel& model, const S
         if (options.progress) progress.update(t - 1);
     }
     r.summary = summarize(r.metrics, model.length_scale(), int(sequence.train_frames));
+    r.summary.timing_threads = double(num_threads());  // the times above ran with these threads
     return r;
 }
 

@@ -28,6 +28,11 @@
 //             hidden()     not in the table
 //   cli     cli(header, width, printf conversion taking (width, value)), or no_cli()
 //
+// timing_threads is the thread count of the process that rolled out (and so timed) the
+// sequence, recorded because a table is often written by another process (a merge, a
+// cluster job) whose own thread count says nothing about the times; NaN in files written
+// before it was recorded.
+//
 // Definitions of the metrics: eval/metrics.hpp. Times are medians per frame after
 // warm-up; M_rms is in metres (unscaled), RMSEs are relative to the rest
 // bounding-box diagonal; horizons are frame indices (= frames if never crossed).
@@ -59,7 +64,8 @@
     X(window,  double, sted,              "STED (1-ring)",      "",       kMean, error(3),              cli("sted", 9, "%*.4g"))       \
     X(rollout, double, integrate_ms,      "integrate (ms)",     "ms",     kMean, sig(3),                no_cli())                      \
     X(rollout, double, decode_ms,         "decode (ms)",        "ms",     kMean, sig(3),                no_cli())                      \
-    X(rollout, double, total_ms,          "total (ms)",         "ms",     kMean, sig(3),                cli("total_ms", 9, "%*.4f"))
+    X(rollout, double, total_ms,          "total (ms)",         "ms",     kMean, sig(3),                cli("total_ms", 9, "%*.4f")) \
+    X(rollout, double, timing_threads,    "timing threads",     "",       kMax,  hidden(),              no_cli())
 // clang-format on
 
 namespace lb {

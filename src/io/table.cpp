@@ -160,7 +160,7 @@ void Table::add_row(std::vector<TableCell> cells)
     rows.push_back(std::move(cells));
 }
 
-void Table::add_provenance() { add_note(provenance_note()); }
+void Table::add_provenance(const std::string& threads) { add_note(provenance_note(threads)); }
 
 bool Table::is_numeric_column(size_t c) const
 {
@@ -194,9 +194,9 @@ std::string machine_description()
     return result + ")";
 }
 
-std::string provenance_note()
+std::string provenance_note(const std::string& threads)
 {
-    return "machine: " + machine_description() + "; threads: " + std::to_string(num_threads()) +
+    return "machine: " + machine_description() + "; threads: " + (threads.empty() ? std::to_string(num_threads()) : threads) +
            "; build: " + std::string(LB_BUILD_TYPE) + "; date: " + utc_now();
 }
 

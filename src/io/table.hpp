@@ -45,8 +45,10 @@ struct Table {
     /// Append a row; throws lb::Error if it does not have one cell per column.
     void add_row(std::vector<TableCell> cells);
     void add_note(std::string note) { notes.push_back(std::move(note)); }
-    /// Append the provenance note: machine, threads, build type, date.
-    void add_provenance();
+    /// Append the provenance note: machine, threads, build type, date. `threads` replaces
+    /// this process's thread count where the table's times were measured elsewhere (e.g.
+    /// "1 (the processes that timed the rollouts)").
+    void add_provenance(const std::string& threads = "");
     /// True if every non-empty cell of column c has a numeric value (right-aligned).
     bool is_numeric_column(size_t c) const;
 };
@@ -54,8 +56,9 @@ struct Table {
 /// "AMD EPYC 7B13 (2 logical cores, x86_64)": CPU model from /proc/cpuinfo
 /// ("model name"), logical core count and machine architecture.
 std::string machine_description();
-/// "machine: ...; threads: N; build: Release; date: 2025-01-31 14:05 UTC".
-std::string provenance_note();
+/// "machine: ...; threads: N; build: Release; date: 2025-01-31 14:05 UTC"; `threads`, if
+/// given, stands for N (this process's thread count).
+std::string provenance_note(const std::string& threads = "");
 
 /// GitHub-flavoured Markdown: "## title", caption paragraph, table (numeric
 /// columns right-aligned, '|' escaped), notes as a bullet list.

@@ -99,8 +99,8 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
 #pragma omp parallel for schedule(dynamic, 1)
     for (Index i = 0; i < B; ++i) {
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
-        const VectorXd x1 = X_prev.col(i), x2 = X_prev2.col(i), xt = X.col(i);
-        pot.set_previous(x1, x2);
+        const VectorXd xt = X.col(i);
+        pot.set_previous(X_prev.col(i), X_prev2.col(i));
         pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
         if (gradient) {
             VectorXd& g = m_gradients[size_t(omp_get_thread_num())];  // reused: no allocation per sample

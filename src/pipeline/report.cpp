@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 #include "eval/summary_schema.hpp"
 #include "io/table.hpp"
@@ -62,6 +63,35 @@ TableCell budget_cell(const std::vector<TrainingBudget>& budgets)
     return TableCell(out, epochs);
 }
 
+/// The provenance note's thread entry of tabulated rollout times: the thread counts of the
+/// processes that rolled out (RolloutSummary::timing_threads), which need not be the table
+/// writer's (a merge of work units, a cluster job). "" (the writer's) if nothing is tabulated.
+std::string timing_threads_text(const std::vector<const MethodResult*>& methods)
+{
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    bool unrecorded = false, any = false;
+    for (const MethodResult* m : methods) {
+        for (const RolloutSummary& s : m->summaries) {
+            any = true;
+            if (!(s.timing_threads >= 1.0)) {
+                unrecorded = true;
+                continue;
+            }
+            lo = std::min(lo, s.timing_threads);
+            hi = std::max(hi, s.timing_threads);
+        }
+    }
+    if (!any) return "";
+    std::string text;
+    if (lo <= hi) {
+        text = std::to_string(int(lo)) + (hi > lo ? "–" + std::to_string(int(hi)) : "") +
+               (hi > lo ? " (the rollouts were timed with different thread counts)" : " (as the rollouts were timed)");
+    }
+    if (unrecorded)
+        text += std::string(text.empty() ? "" : "; ") + "not recorded for rollouts written before 2026-12-02";
+    return text;
+}
+
 Table comparison_table(const SceneResult& r, const std::vector<std::string>& only, const std::string& title)
 {
     Table t;
@@ -96,8 +126,10 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
     t.columns = {"method", "configuration", "training", "window"};
     if (swept) t.columns.insert(t.columns.begin() + 1, "sweep point");
     for (const auto& title : summary_table_columns()) t.columns.push_back(title);
+    std::vector<const MethodResult*> shown;
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
+        shown.push_back(&m);
         const RolloutSummary s = aggregate(m.summaries);
         for (const SummaryScope window : {SummaryScope::Train, SummaryScope::Test}) {
             std::vector<TableCell> cells{m.name, m.summary, budget_cell(m.budgets), window_label(s, window)};
@@ -109,7 +141,7 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
         }
     }
     t.add_note("training horizon: " + std::to_string(r.train_frames) + " frames per sequence");
-    t.add_provenance();
+    t.add_provenance(timing_threads_text(shown));
     return t;
 }
 
@@ -166,9 +198,11 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
     t2.columns = {"example", "DOF", "latent", "decoder layers", "integrator layers", "JVP (ms)", "ours (ms)",
                   "fulton_cubature (ms)", "paper decoder layers", "paper integrator layers", "paper JVP (ms)",
                   "paper ours (ms)"};
+    std::vector<const MethodResult*> timed;  // the rollouts whose times the two tables show
     for (const SceneResult& r : scenes) {
         const auto ours = std::find_if(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return m.paper_method; });
         if (ours == r.methods.end()) continue;
+        timed.push_back(&*ours);
         const RolloutSummary s = aggregate(ours->summaries);
         const auto reference = std::find_if(r.methods.begin(), r.methods.end(),
                                             [](const MethodResult& m) { return m.method == "full_space"; });
@@ -178,6 +212,8 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
                                          [](const MethodResult& m) { return m.method == "fulton_cubature"; });
         const TableCell fulton_ms =
             fulton != r.methods.end() ? number(aggregate(fulton->summaries).total_ms) : TableCell::missing();
+        if (reference != r.methods.end()) timed.push_back(&*reference);
+        if (fulton != r.methods.end()) timed.push_back(&*fulton);
         const PaperTable1Row* p1 = find_paper_table1_row(r.scene_name);
         const PaperTable2Row* p2 = find_paper_table2_row(r.scene_name);
         t1.add_row({r.label, TableCell::integer(r.dofs), TableCell::integer(r.latent), simulation,
@@ -191,8 +227,8 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
                     p2 ? TableCell(format_layers(p2->integrator_layers)) : TableCell::missing(),
                     paper_cell(p2, p2 ? p2->jvp_ms : 0), paper_cell(p2, p2 ? p2->ours_ms : 0)});
     }
-    t1.add_provenance();
-    t2.add_provenance();
+    t1.add_provenance(timing_threads_text(timed));
+    t2.add_provenance(timing_threads_text(timed));
 }
 
 } // namespace

@@ -125,7 +125,7 @@ IncrementalPotential::IncrementalPotential(const PhysicsModel& model, double pen
     m_inertia->set_x_tilde(m_x_tilde);
 }
 
-void IncrementalPotential::set_previous(const VectorXd& x_prev, const VectorXd& x_prev2)
+void IncrementalPotential::set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2)
 {
     m_x_tilde = 2.0 * x_prev - x_prev2;
     m_inertia->set_x_tilde(m_x_tilde);

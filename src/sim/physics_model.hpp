@@ -101,7 +101,7 @@ public:
     IncrementalPotential(const PhysicsModel& model, double penalty_weight);
 
     /// x̃ = 2 x_prev − x_prev2 (both 3N).
-    void set_previous(const VectorXd& x_prev, const VectorXd& x_prev2);
+    void set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2);
     /// Penalty targets x*_B (B×3); ignored without a penalty.
     void set_bc_targets(const MatrixX3d& targets);
 

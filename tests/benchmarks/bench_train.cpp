@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 
+#include "core/allocator.hpp"
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "integrators/trainer.hpp"
@@ -85,6 +86,7 @@ TrainingSetup& setup(const std::string& scene_name)
 void train_epoch(benchmark::State& state, const std::string& scene_name, bool float32)
 {
     set_log_level(LogLevel::Quiet);
+    keep_freed_memory();  // the CLI's heap policy (core/allocator.hpp)
     TrainingSetup* s = nullptr;
     try {
         s = &setup(scene_name);

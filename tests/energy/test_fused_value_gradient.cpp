@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "core/parallel.hpp"
+#include "energy/dirichlet_penalty.hpp"
+#include "energy/inertia_energy.hpp"
 #include "energy_checks.hpp"
 #include "mesh/generators.hpp"
 #include "scene/scene.hpp"
@@ -31,6 +33,16 @@ void check_scene(const std::string& scene_name, Mesh mesh)
         EXPECT_TRUE(lb::testing::check_fused_value_gradient(*term, x)) << scene_name;
     }
     EXPECT_TRUE(lb::testing::check_fused_value_gradient(*model.gravity(), x)) << scene_name;
+    // The vertex terms' whole-state passes (no per-vertex call), at a moved inertial target
+    // and penalty targets.
+    InertiaEnergy inertia(model.masses(), model.dt());
+    inertia.set_x_tilde(lb::testing::perturbed_state(model.mesh().rest_positions, 0.02 * model.length_scale(), rng));
+    EXPECT_TRUE(lb::testing::check_fused_value_gradient(inertia, x)) << scene_name;
+    std::vector<int> boundary;
+    for (int v = 0; v < int(model.mesh().num_vertices()); v += 7) boundary.push_back(v);
+    DirichletPenalty penalty(boundary, 1e5);
+    penalty.set_targets(MatrixX3d::Random(Index(boundary.size()), 3));
+    EXPECT_TRUE(lb::testing::check_fused_value_gradient(penalty, x)) << scene_name;
     EXPECT_TRUE(large) << scene_name << ": no term reaches the parallel branch";
 }
 

@@ -61,10 +61,17 @@ TEST(RodCurvature, JacobianAndContractedHessianMatchFiniteDifferences)
             return VectorXd(Jy.transpose() * w);
         };
         // The vector-Jacobian product without J is Jᵀw.
+        // The vector-Jacobian product without J (w = s κb) is Jᵀw, and returns κb and |κb|².
         const Vector3d kb = curvature_binormal(e0, e1);
-        EXPECT_LT((curvature_binormal_vjp(e0, e1, kb, w) - J.transpose() * w).norm(),
-                  1e-14 * (J.norm() * w.norm()))
+        const double s = 0.5 + trial;
+        double a0[3], a1[3], kb_out[3], vjp[6];
+        for (int i = 0; i < 3; ++i) a0[i] = e0[i], a1[i] = e1[i];
+        const double kk = curvature_binormal_vjp(a0, a1, s, kb_out, vjp);
+        EXPECT_LT((Eigen::Map<const Eigen::Matrix<double, 6, 1>>(vjp) - J.transpose() * (s * kb)).norm(),
+                  1e-14 * (J.norm() * s * kb.norm()))
             << "trial " << trial;
+        EXPECT_LT((Eigen::Map<const Vector3d>(kb_out) - kb).norm(), 1e-14 * kb.norm()) << "trial " << trial;
+        EXPECT_NEAR(kk, kb.squaredNorm(), 1e-14 * kb.squaredNorm()) << "trial " << trial;
         const Matrix6d H = curvature_binormal_contracted_hessian(e0, e1, w);
         EXPECT_TRUE(check_jacobian(Jt_w, MatrixXd(H), z, opt, "w . d2kb/dz2")) << "trial " << trial;
         EXPECT_LT((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff());

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "core/parallel.hpp"
 #include "eval/metrics.hpp"
 #include "pipeline/report.hpp"
 
@@ -101,6 +102,33 @@ TEST(Report, DivergedRowsReadAsDivergedAndWindowsAreApart)
         EXPECT_EQ(row.find("| 0 |"), std::string::npos) << "a diverged row shows a 0: " << row;
     }
     EXPECT_NE(md.find("One test sequence per row"), std::string::npos);
+}
+
+TEST(Report, ThreadsFooterIsTheTimedRolloutsNotTheWriters)
+{
+    // Work units timed with -j 1 and merged by a -j 2 process once printed "threads: 2".
+    set_num_threads(2);
+    RolloutSummary one = rollout_summary(0);
+    one.timing_threads = 1;
+    ExperimentConfig ex;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_threads";
+    std::filesystem::remove_all(dir);
+    const SceneResult same = scene_with({method_result("ours", "latent_mlp", "self_supervised", true, {one, one})});
+    for (const std::string& path : write_tables(ex, {same}, dir)) {
+        const std::string md = read_all(path);
+        EXPECT_NE(md.find("threads: 1 (as the rollouts were timed)"), std::string::npos) << path << "\n" << md;
+        EXPECT_EQ(md.find("threads: 2"), std::string::npos) << path;
+    }
+    RolloutSummary two = one;
+    two.timing_threads = 2;
+    RolloutSummary old = one;
+    old.timing_threads = kNan;  // a rollout file from before the count was recorded
+    const SceneResult mixed = scene_with({method_result("ours", "latent_mlp", "self_supervised", true, {one, two, old})});
+    const std::string md = read_all(write_tables(ex, {mixed}, dir + "_mixed").at(0));
+    EXPECT_NE(md.find("threads: 1–2 (the rollouts were timed with different thread counts); not recorded"),
+              std::string::npos)
+        << md;
+    set_num_threads(0);
 }
 
 TEST(Report, CaptionStatesHowSequencesAreCombined)

@@ -1,0 +1,114 @@
+#pragma once
+// The serial value-and-gradient pass of an element energy vectorised across elements: the
+// training losses' hot loop (Energy::add_value_gradient, once per sample of every batch).
+//
+// The element kernels of ElementEnergy work on one element's fixed-size matrices, so the
+// compiler can only use short vectors inside an element. Here the elements are stored in
+// blocks of kLanes (structure of arrays: the vertex indices and the P per-element
+// parameters, e.g. shape gradients and rest measure, an array over the block's lanes), and
+// one loop over the lanes runs the whole element kernel, which the compiler turns into one
+// SIMD lane per element (8 doubles with AVX-512). Gradients are scattered lane by lane after
+// each block (elements share vertices). The last block is padded with copies of the last
+// element whose lane scale is 0, so padding adds exactly 0 and never divides by zero.
+//
+// A kernel is a callable inlined into that loop:
+//   double kernel(const double (&x)[K][3], const double (&p)[P], double (&g)[K][3])
+// returning E_e(x) and writing ∂E_e/∂x_a to g[a]. Energies using it test the pass against
+// their per-element kernels (energy_checks.hpp, check_fused_value_gradient).
+#include <array>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace lb {
+
+template <int K, int P>
+class ElementLanes {
+public:
+    static constexpr int kLanes = 8;
+    using Params = std::array<double, P>;
+
+    ElementLanes() = default;
+    /// @param n          number of elements
+    /// @param nodes      K vertex indices of element e at nodes[K e + a]
+    /// @param params_of  e ↦ the P parameters of element e (Params)
+    template <typename ParamsOf>
+    ElementLanes(Index n, const int* nodes, ParamsOf&& params_of)
+    {
+        m_blocks.resize(std::size_t((n + kLanes - 1) / kLanes));
+        for (std::size_t k = 0; k < m_blocks.size(); ++k) {
+            Block& blk = m_blocks[k];
+            for (int l = 0; l < kLanes; ++l) {
+                const Index real = Index(k) * kLanes + l;
+                const Index e = real < n ? real : n - 1;
+                blk.scale[l] = real < n ? 1.0 : 0.0;
+                const Params p = params_of(e);
+                for (int j = 0; j < P; ++j) blk.params[j][l] = p[std::size_t(j)];
+                for (int a = 0; a < K; ++a) blk.nodes[a][l] = nodes[K * e + a];
+            }
+        }
+    }
+
+    /// The kernel on one gathered element (xe and g 3K, xyz interleaved): the per-element path
+    /// (local_value_gradient) of an energy whose lane kernel is its one value-and-gradient code.
+    template <typename Kernel>
+    static double evaluate(const Eigen::Matrix<double, 3 * K, 1>& xe, const Params& params,
+                           Eigen::Matrix<double, 3 * K, 1>& g, const Kernel& kernel)
+    {
+        double x[K][3], p[P], ge[K][3];
+        for (int a = 0; a < K; ++a) {
+            for (int i = 0; i < 3; ++i) x[a][i] = xe[3 * a + i];
+        }
+        for (int j = 0; j < P; ++j) p[j] = params[std::size_t(j)];
+        const double value = kernel(x, p, ge);
+        for (int a = 0; a < K; ++a) {
+            for (int i = 0; i < 3; ++i) g[3 * a + i] = ge[a][i];
+        }
+        return value;
+    }
+
+    /// Returns Σ_e E_e(x) and adds weight · ∇E(x) to g (both 3N, xyz interleaved); serial,
+    /// allocates nothing.
+    template <typename Kernel>
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g, const Kernel& kernel) const
+    {
+        const double* xd = x.data();
+        double* gd = g.data();
+        double sum = 0.0;
+        alignas(64) double out[K][3][kLanes];
+        for (const Block& blk : m_blocks) {
+            double block_sum = 0.0;
+#pragma omp simd reduction(+ : block_sum)
+            for (int l = 0; l < kLanes; ++l) {
+                double xe[K][3], p[P], ge[K][3];
+                for (int a = 0; a < K; ++a) {
+                    for (int i = 0; i < 3; ++i) xe[a][i] = xd[3 * Index(blk.nodes[a][l]) + i];
+                }
+                for (int j = 0; j < P; ++j) p[j] = blk.params[j][l];
+                const double s = blk.scale[l];
+                block_sum += s * kernel(xe, p, ge);
+                for (int a = 0; a < K; ++a) {
+                    for (int i = 0; i < 3; ++i) out[a][i][l] = s * ge[a][i];
+                }
+            }
+            sum += block_sum;
+            for (int l = 0; l < kLanes; ++l) {
+                for (int a = 0; a < K; ++a) {
+                    double* ga = gd + 3 * Index(blk.nodes[a][l]);
+                    for (int i = 0; i < 3; ++i) ga[i] += weight * out[a][i][l];
+                }
+            }
+        }
+        return sum;
+    }
+
+private:
+    struct alignas(64) Block {
+        int nodes[K][kLanes];
+        double params[P][kLanes];
+        double scale[kLanes];  ///< 1, or 0 for padding
+    };
+    std::vector<Block> m_blocks;
+};
+
+} // namespace lb
