@@ -13,8 +13,10 @@
 //
 // A kernel is a callable inlined into that loop:
 //   double kernel(const double (&x)[K][3], const double (&p)[P], double (&g)[K][3])
-// returning E_e(x) and writing ∂E_e/∂x_a to g[a]. Energies using it test the pass against
-// their per-element kernels (energy_checks.hpp, check_fused_value_gradient).
+// returning E_e(x) and writing ∂E_e/∂x_a to g[a]. An energy using it runs the same kernel for
+// one element (evaluate, its local_value_gradient), so there is one copy of its formulas; the
+// energy tests check the blocked pass against value() and gradient() (check_fused_value_gradient)
+// and the gradient against finite differences of value(), whose local_value is written apart.
 #include <array>
 #include <vector>
 
