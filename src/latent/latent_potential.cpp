@@ -19,6 +19,7 @@ LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoenc
     m_potentials.reserve(size_t(threads));
     for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
     m_gradients.resize(size_t(threads));
+    m_positions.resize(size_t(threads));
 }
 
 double LatentPotential::value(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
@@ -99,7 +100,8 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
 #pragma omp parallel for schedule(dynamic, 1)
     for (Index i = 0; i < B; ++i) {
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
-        const VectorXd xt = X.col(i);
+        VectorXd& xt = m_positions[size_t(omp_get_thread_num())];  // reused: no allocation per sample
+        xt = X.col(i);
         pot.set_previous(X_prev.col(i), X_prev2.col(i));
         pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
         if (gradient) {

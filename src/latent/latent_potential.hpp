@@ -139,6 +139,7 @@ private:
     bool m_overwrite_dirichlet = false;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
     std::vector<VectorXd> m_gradients;               ///< one x-gradient workspace per thread
+    std::vector<VectorXd> m_positions;               ///< one decoded-state workspace per thread
     std::unique_ptr<nn::InferenceNetworkD> m_frozen;       ///< freeze_decoder()'s compiled decoder
     std::unique_ptr<nn::InferenceNetwork> m_frozen_float;  ///< or its single-precision copy
     MatrixXd m_features;                                   ///< its output workspace
