@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 
 #include <CLI/CLI.hpp>
 
@@ -71,6 +72,11 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "latentbench: error: %s (see latentbench --help)\n", e.what());
         return 1;
     } catch (const lb::Error& e) {
+        std::fprintf(stderr, "latentbench: error: %s\n", e.what());
+        return 1;
+    } catch (const std::filesystem::filesystem_error& e) {
+        // A path that cannot be made or written (a file where a directory must go, no
+        // permission, a full disk) is the environment's, not a bug: exit 1 naming the path.
         std::fprintf(stderr, "latentbench: error: %s\n", e.what());
         return 1;
     } catch (const std::exception& e) {
