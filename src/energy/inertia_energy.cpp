@@ -32,6 +32,17 @@ void InertiaEnergy::set_x_tilde(const VectorXd& x_tilde)
     m_x_tilde = x_tilde;
 }
 
+void InertiaEnergy::set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2)
+{
+    if (x_prev.size() != m_x_tilde.size() || x_prev2.size() != m_x_tilde.size()) {
+        std::ostringstream msg;
+        msg << "InertiaEnergy::set_previous: expected " << m_x_tilde.size() << " values (3N), got "
+            << x_prev.size() << " and " << x_prev2.size();
+        throw Error(msg.str());
+    }
+    m_x_tilde.noalias() = 2.0 * x_prev - x_prev2;
+}
+
 double InertiaEnergy::local_value(Index i, const ElementVector& xe) const
 {
     return 0.5 * m_inv_dt2 * m_masses[i] * (xe - m_x_tilde.segment<3>(3 * i)).squaredNorm();

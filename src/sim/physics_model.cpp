@@ -121,15 +121,15 @@ IncrementalPotential::IncrementalPotential(const PhysicsModel& model, double pen
         m_penalty = std::make_shared<DirichletPenalty>(model.bc_indices(), penalty_weight);
         m_sum.add(m_penalty);
     }
-    m_x_tilde = model.rest_state();
-    m_inertia->set_x_tilde(m_x_tilde);
+    m_inertia->set_x_tilde(model.rest_state());
 }
 
 void IncrementalPotential::set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2)
 {
-    m_x_tilde = 2.0 * x_prev - x_prev2;
-    m_inertia->set_x_tilde(m_x_tilde);
+    m_inertia->set_previous(x_prev, x_prev2);
 }
+
+const VectorXd& IncrementalPotential::x_tilde() const { return m_inertia->x_tilde(); }
 
 void IncrementalPotential::set_bc_targets(const MatrixX3d& targets)
 {

@@ -110,14 +110,13 @@ public:
     VectorXd gradient(const VectorXd& x) const { return m_sum.gradient(x); }
     /// value(x), with gradient(x) written to g (resized), in one pass over the elements.
     double value_gradient(const VectorXd& x, VectorXd& g) const { return m_sum.value_gradient(x, g); }
-    const VectorXd& x_tilde() const { return m_x_tilde; }
+    const VectorXd& x_tilde() const;
     bool has_penalty() const { return m_penalty != nullptr; }
 
 private:
     std::shared_ptr<InertiaEnergy> m_inertia;
     std::shared_ptr<DirichletPenalty> m_penalty;
-    EnergySum m_sum;
-    VectorXd m_x_tilde;
+    EnergySum m_sum;  ///< x̃ lives in the inertia term only (set_previous writes it there)
 };
 
 } // namespace lb

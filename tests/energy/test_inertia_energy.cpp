@@ -44,10 +44,22 @@ TEST(InertiaEnergy, MatchesMassWeightedQuadratic)
     for (int i = 0; i < kVertices; ++i) EXPECT_NEAR(H(3 * i + 1, 3 * i + 1), masses[i] / (kDt * kDt), 1e-9);
 }
 
+TEST(InertiaEnergy, SetPreviousFormsTheInertialTarget)
+{
+    Rng rng(83);
+    InertiaEnergy energy(VectorXd::Ones(kVertices), kDt);
+    const VectorXd x_prev = rng.uniform_vector(3 * kVertices, -1, 1);
+    const VectorXd x_prev2 = rng.uniform_vector(3 * kVertices, -1, 1);
+    energy.set_previous(x_prev, x_prev2);
+    EXPECT_EQ(energy.x_tilde(), VectorXd(2.0 * x_prev - x_prev2));
+    EXPECT_NEAR(energy.value(2.0 * x_prev - x_prev2), 0.0, 1e-30);
+}
+
 TEST(InertiaEnergy, RejectsWrongSizesAndNonPositiveStep)
 {
     InertiaEnergy energy(VectorXd::Ones(kVertices), kDt);
     EXPECT_THROW(energy.set_x_tilde(VectorXd::Zero(kVertices)), Error);
+    EXPECT_THROW(energy.set_previous(VectorXd::Zero(3 * kVertices), VectorXd::Zero(kVertices)), Error);
     EXPECT_THROW(InertiaEnergy(VectorXd::Ones(kVertices), 0.0), Error);
     EXPECT_THROW(InertiaEnergy(-VectorXd::Ones(kVertices), kDt), Error);
 }
