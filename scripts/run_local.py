@@ -17,8 +17,9 @@ merge are the commands a Slurm run uses: README, "Running on a cluster").
   runs does not change the units still to start (--no-snapshot uses it in place).
 - Resuming: a unit whose outputs are complete finishes at once as cached, and a killed fit
   resumes from its checkpoint, so running this again continues an interrupted run.
-- Failure: a unit that exits non-zero stops new starts; the running ones finish, its log
-  (RUN_DIR/units/<id>.log) is named and this exits 1 without merging. Ctrl-C stops the
+- Failure: a unit that exits non-zero stops new starts; the running ones finish, the last
+  lines of its output (RUN_DIR/units/<id>.driver.out) are printed and this exits 1 without
+  merging. Ctrl-C stops the
   children and exits 1.
 Nothing is run through a shell.
 """
@@ -100,6 +101,9 @@ def main(argv=None):
     log_dir = run_dir / "units"
     log_dir.mkdir(parents=True, exist_ok=True)
 
+    def driver_out(unit_id):
+        return log_dir / f"{unit_id}.driver.out"
+
     def stamp():
         return f"[{time.monotonic() - started:7.0f} s]"
 
@@ -120,7 +124,7 @@ def main(argv=None):
                            key=cost, reverse=True)
             for unit in ready[: max(0, args.workers - len(running))]:
                 del pending[unit["id"]]
-                out = open(log_dir / f"{unit['id']}.driver.out", "w")
+                out = open(driver_out(unit["id"]), "w")
                 proc = subprocess.Popen([str(cli), "-q", "-j", "1", "run", str(suite), "-o",
                                          str(run_dir), "--unit", unit["id"]],
                                         stdout=out, stderr=subprocess.STDOUT, env=env)
@@ -141,8 +145,8 @@ def main(argv=None):
             else:
                 failed.append(unit_id)
                 print(f"{stamp()} FAILED {unit_id} (exit {proc.returncode} after {seconds:.0f} s; "
-                      f"see {log_dir / (unit_id + '.driver.out')}):", flush=True)
-                tail = (log_dir / f"{unit_id}.driver.out").read_text(errors="replace").splitlines()[-3:]
+                      f"see {driver_out(unit_id)}):", flush=True)
+                tail = driver_out(unit_id).read_text(errors="replace").splitlines()[-3:]
                 for line in tail:
                     print(f"         {line}", flush=True)
     if failed:

@@ -21,25 +21,24 @@ InertiaEnergy::InertiaEnergy(VectorXd masses, double dt)
     m_dof_weights = (m_inv_dt2 * m_masses).replicate(1, 3).transpose().reshaped();
 }
 
+void InertiaEnergy::require_size(const char* caller, Index size) const
+{
+    if (size == m_x_tilde.size()) return;
+    std::ostringstream msg;
+    msg << "InertiaEnergy::" << caller << ": expected " << m_x_tilde.size() << " values (3N), got " << size;
+    throw Error(msg.str());
+}
+
 void InertiaEnergy::set_x_tilde(const VectorXd& x_tilde)
 {
-    if (x_tilde.size() != m_x_tilde.size()) {
-        std::ostringstream msg;
-        msg << "InertiaEnergy::set_x_tilde: expected " << m_x_tilde.size() << " values (3N), got "
-            << x_tilde.size();
-        throw Error(msg.str());
-    }
+    require_size("set_x_tilde", x_tilde.size());
     m_x_tilde = x_tilde;
 }
 
 void InertiaEnergy::set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2)
 {
-    if (x_prev.size() != m_x_tilde.size() || x_prev2.size() != m_x_tilde.size()) {
-        std::ostringstream msg;
-        msg << "InertiaEnergy::set_previous: expected " << m_x_tilde.size() << " values (3N), got "
-            << x_prev.size() << " and " << x_prev2.size();
-        throw Error(msg.str());
-    }
+    require_size("set_previous", x_prev.size());
+    require_size("set_previous", x_prev2.size());
     m_x_tilde.noalias() = 2.0 * x_prev - x_prev2;
 }
 

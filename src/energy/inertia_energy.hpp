@@ -40,6 +40,9 @@ private:
     double m_inv_dt2;
     VectorXd m_dof_weights;  ///< m_i / h² per DOF (3N)
     VectorXd m_x_tilde;
+
+    /// Throws Error naming caller unless size is 3N.
+    void require_size(const char* caller, Index size) const;
 };
 
 } // namespace lb
