@@ -99,7 +99,10 @@ const Corpus& corpus()
 {
     static const Corpus c = [] {
         Corpus k;
-        k.dir = fresh_dir("fuzz_corpus");
+        // One directory per test: ctest runs each test as its own process, two at a time, and
+        // a shared directory let one process remove the files another was building.
+        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        k.dir = fresh_dir(std::string("fuzz_corpus_") + (test ? test->name() : "main"));
         write_file(k.dir + "/scene.toml", testing::kTinySceneToml);
         k.data = k.dir + "/data.h5";
         k.ae = k.dir + "/ae.h5";
