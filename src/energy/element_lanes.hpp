@@ -12,8 +12,9 @@
 // element whose lane scale is 0, so padding adds exactly 0 and never divides by zero.
 //
 // A kernel is a callable inlined into that loop:
-//   double kernel(const double (&x)[K][3], const double (&p)[P], double (&g)[K][3])
-// returning E_e(x) and writing ∂E_e/∂x_a to g[a]. An energy using it runs the same kernel for
+//   double kernel(const double (&x)[K][3], const auto& p, double (&g)[K][3])
+// returning E_e(x) and writing ∂E_e/∂x_a to g[a]; p[j] (j < P) reads the element's parameters
+// (a double array on the one-element path, a view into the block on the lane path). An energy using it runs the same kernel for
 // one element (evaluate, its local_value_gradient), so there is one copy of its formulas; the
 // energy tests check the blocked pass against value() and gradient() (check_fused_value_gradient)
 // and the gradient against finite differences of value(), whose local_value is written apart.
@@ -77,23 +78,34 @@ public:
         const double* xd = x.data();
         double* gd = g.data();
         double sum = 0.0;
+        alignas(64) double xs[K][3][kLanes];
         alignas(64) double out[K][3][kLanes];
         for (const Block& blk : m_blocks) {
-            double block_sum = 0.0;
-#pragma omp simd reduction(+ : block_sum)
-            for (int l = 0; l < kLanes; ++l) {
-                double xe[K][3], p[P], ge[K][3];
-                for (int a = 0; a < K; ++a) {
-                    for (int i = 0; i < 3; ++i) xe[a][i] = xd[3 * Index(blk.nodes[a][l]) + i];
+            // Gather first, so the lane loop below reads and writes unit-stride arrays only.
+            for (int a = 0; a < K; ++a) {
+                for (int l = 0; l < kLanes; ++l) {
+                    const double* xa = xd + 3 * Index(blk.nodes[a][l]);
+                    for (int i = 0; i < 3; ++i) xs[a][i][l] = xa[i];
                 }
-                for (int j = 0; j < P; ++j) p[j] = blk.params[j][l];
+            }
+
+            alignas(64) double values[kLanes];
+#pragma omp simd
+            for (int l = 0; l < kLanes; ++l) {
+                double xe[K][3], ge[K][3];
+                for (int a = 0; a < K; ++a) {
+                    for (int i = 0; i < 3; ++i) xe[a][i] = xs[a][i][l];
+                }
+                // Not a private copy: GCC stores a private array of P > 1 doubles per lane
+                // with a stride and then refuses the loop ("not suitable for scatter store").
+                const LaneParams p{&blk.params[0][l]};
                 const double s = blk.scale[l];
-                block_sum += s * kernel(xe, p, ge);
+                values[l] = s * kernel(xe, p, ge);
                 for (int a = 0; a < K; ++a) {
                     for (int i = 0; i < 3; ++i) out[a][i][l] = s * ge[a][i];
                 }
             }
-            sum += block_sum;
+            for (int l = 0; l < kLanes; ++l) sum += values[l];
             for (int l = 0; l < kLanes; ++l) {
                 for (int a = 0; a < K; ++a) {
                     double* ga = gd + 3 * Index(blk.nodes[a][l]);
@@ -105,6 +117,11 @@ public:
     }
 
 private:
+    /// p[j] of one lane, read in place from the block's structure of arrays.
+    struct LaneParams {
+        const double* first;  ///< &params[0][lane]
+        double operator[](int j) const { return first[j * kLanes]; }
+    };
     struct alignas(64) Block {
         int nodes[K][kLanes];
         double params[P][kLanes];

@@ -24,7 +24,7 @@ Eigen::Matrix<double, 6, 9> edge_map()
 /// E = c |κb|² of one stencil (p = {c}) and its gradient: ∇_z E = 2c Jᵀκb over z = (e0, e1)
 /// (curvature_binormal_vjp, J never formed), ∇_x E = Sᵀ ∇_z E. One SIMD lane of the training
 /// pass, or one element (local_value_gradient).
-const auto kBendingKernel = [](const double (&x)[3][3], const double (&p)[1], double (&g)[3][3]) {
+const auto kBendingKernel = [](const double (&x)[3][3], const auto& p, double (&g)[3][3]) {
     double e0[3], e1[3], kb[3], gz[6];
     for (int i = 0; i < 3; ++i) {
         e0[i] = x[1][i] - x[0][i];

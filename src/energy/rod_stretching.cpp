@@ -11,7 +11,7 @@ namespace {
 /// E = ½ k_s (|e| − |ē|)²/|ē| of one edge (p = {k_s, |ē|}) and its gradient
 /// ∂E/∂x1 = k_s (|e| − |ē|)/|ē| · ê = −∂E/∂x0, one edge length for both. One SIMD lane of the
 /// training pass, or one element (local_value_gradient).
-const auto kStretchingKernel = [](const double (&x)[2][3], const double (&p)[2], double (&g)[2][3]) {
+const auto kStretchingKernel = [](const double (&x)[2][3], const auto& p, double (&g)[2][3]) {
     const double k = p[0], rest = p[1];
     const double e[3] = {x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]};
     const double length = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);

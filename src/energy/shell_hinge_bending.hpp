@@ -13,13 +13,12 @@
 #include <vector>
 
 #include "energy/dihedral_angle.hpp"
+#include "energy/element_lanes.hpp"
 #include "energy/energy.hpp"
 
 namespace lb {
 
-class ShellHingeBending final : public InlinedElementEnergy<ShellHingeBending, 4> {
-    friend class InlinedElementEnergy<ShellHingeBending, 4>;  // calls local_value_gradient
-
+class ShellHingeBending final : public ElementEnergy<4> {
 public:
     /// @param rest       N×3 rest positions (m)
     /// @param hinges     M×4 hinge stencils (v0, v1, v2, v3)
@@ -30,6 +29,9 @@ public:
                       double youngs, double poisson, double thickness);
 
     std::string name() const override { return "shell_hinge_bending"; }
+    /// The serial pass (inside the training losses' batch loop) vectorised across hinges
+    /// (energy/element_lanes.hpp, θ by lane_atan2); the parallel pass is Energy's.
+    double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// k_b = E t³ / (24 (1−ν²)) (N·m).
     double bending_stiffness() const { return m_bending_stiffness; }
@@ -48,6 +50,7 @@ private:
     double m_bending_stiffness = 0.0;
     std::vector<double> m_rest_angles;
     std::vector<double> m_weights;
+    ElementLanes<4, 2> m_lanes;  ///< the hinges with (w_h, θ̄), blocked for add_value_gradient
 };
 
 } // namespace lb

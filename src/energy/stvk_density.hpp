@@ -156,8 +156,9 @@ std::array<double, K * D + 1> stvk_lane_params(const Eigen::Matrix<double, K, D>
 /// E_e = V ψ(F) with its gradient g_a = V P b_a, the Green strain formed once for both, on
 /// plain arrays: one SIMD lane of ElementLanes (the training losses' pass) or, through
 /// ElementLanes::evaluate, one element (local_value_gradient).
-template <int K, int D>
-inline double stvk_lane_value_gradient(const double (&x)[K][3], const double (&p)[K * D + 1],
+/// p[j], j < K·D + 1: the shape gradients b_a (p[D a + d]) and the rest measure V (p[K D]).
+template <int K, int D, typename Params>
+inline double stvk_lane_value_gradient(const double (&x)[K][3], const Params& p,
                                        const LameParameters& lame, double (&g)[K][3])
 {
     double F[3][D] = {};
