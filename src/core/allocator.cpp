@@ -1,5 +1,7 @@
 #include "core/allocator.hpp"
 
+#include <cstdlib>  // defines __GLIBC__ (features.h); without a C library header first,
+                    // the test below was always false and the policy compiled to nothing
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
