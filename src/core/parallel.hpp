@@ -7,6 +7,10 @@ namespace lb {
 
 /// Minimum number of elements for an OpenMP-parallel element loop.
 constexpr long kParallelElementThreshold = 2048;
+/// Minimum number of columns (samples, frames) for an OpenMP-parallel loop over the columns
+/// of a batch of states whose per-column work is a pass over the vertices (a training batch
+/// has hundreds; a rollout step one).
+constexpr long kParallelColumns = 16;
 
 /// Set the number of threads used by latentbench's OpenMP loops (≤ 0: all cores).
 void set_num_threads(int threads);

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/log.hpp"
+#include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "io/hdf5.hpp"
 #include "nn/adam.hpp"
@@ -47,10 +48,19 @@ VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen:
 {
     assert(X_prev.rows() == X_prev2.rows() && X_prev.cols() == X_prev2.cols() && X_prev.rows() % 3 == 0);
     VectorXd speeds(X_prev.cols());
+    const Index N = X_prev.rows() / 3;
+#pragma omp parallel for schedule(static) if (X_prev.cols() >= kParallelColumns)
     for (Index i = 0; i < X_prev.cols(); ++i) {
-        const VectorXd d = X_prev.col(i) - X_prev2.col(i);  // N × 3 as rows: displacements over h
-        speeds[i] = velocity == BalancingVelocity::MeanVelocity ? (as_rows(d).colwise().mean() / dt).norm()
-                                                                : as_rows(d).rowwise().norm().mean() / dt;
+        // Displacements over h of the N vertices, read in place (no per-column copy).
+        Vector3d mean_velocity = Vector3d::Zero();
+        double mean_speed = 0.0;
+        for (Index j = 0; j < N; ++j) {
+            const Vector3d d = X_prev.col(i).segment<3>(3 * j) - X_prev2.col(i).segment<3>(3 * j);
+            mean_velocity += d;
+            mean_speed += d.norm();
+        }
+        speeds[i] = velocity == BalancingVelocity::MeanVelocity ? (mean_velocity / double(N) / dt).norm()
+                                                                : mean_speed / double(N) / dt;
     }
     return speeds;
 }
@@ -239,6 +249,7 @@ MatrixXd IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, int whi
     const MatrixXd& cache = which == 1 ? m_decoded_prev : m_decoded_prev2;
     if (cache.size() == 0 || batch.source.size() != size_t(batch.size())) return m_potential.decode(z, targets);
     MatrixXd X(cache.rows(), batch.size());
+#pragma omp parallel for schedule(static) if (batch.clean >= kParallelColumns)
     for (Index i = 0; i < batch.clean; ++i) X.col(i) = cache.col(batch.source[size_t(i)]);
     const Index noisy = batch.size() - batch.clean;
     if (noisy > 0) {

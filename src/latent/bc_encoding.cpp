@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "core/rigid_motion.hpp"
 
 namespace lb {
@@ -173,6 +174,8 @@ MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& tar
                                     std::to_string(F.rows()) + " × " + std::to_string(F.cols()) + " and " +
                                     std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
     MatrixXd X(m_num_dofs, F.cols());
+    // Columns are independent: parallel over a training batch, serial for a rollout's one frame.
+#pragma omp parallel for schedule(static) if (F.cols() >= kParallelColumns)
     for (Index s = 0; s < F.cols(); ++s) positions_of_frame(F.col(s).data(), targets.col(s).data(), X.col(s).data());
     return X;
 }
@@ -187,6 +190,7 @@ MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const 
                                     std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
     if (!m_rod_relative && m_frame == EncodingFrame::translation) return grad_x;  // P = I
     MatrixXd G(m_num_features, grad_x.cols());
+#pragma omp parallel for schedule(static) if (grad_x.cols() >= kParallelColumns)
     for (Index s = 0; s < grad_x.cols(); ++s) {
         const Matrix3d Rt = frame_rotation(targets.col(s).data()).transpose();
         if (m_rod_relative) {

@@ -97,6 +97,11 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
     MatrixXd& grad_x = out.grad_x;
     energies.resize(B);
     grad_x.resize(gradient ? X.rows() : 0, gradient ? B : 0);
+    // The objective's weights w_i / n: divided (not multiplied by 1/n) so the numbers are
+    // those of the integrator loss written out before this class existed.
+    VectorXd weights = options.weights;
+    if (weights.size() == 0) weights.setOnes(B);
+    const VectorXd gradient_scale = weights / options.normalization;
 #pragma omp parallel for schedule(dynamic, 1)
     for (Index i = 0; i < B; ++i) {
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
@@ -107,19 +112,14 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
         if (gradient) {
             VectorXd& g = m_gradients[size_t(omp_get_thread_num())];  // reused: no allocation per sample
             energies[i] = pot.value_gradient(xt, g);
-            grad_x.col(i) = g;
+            grad_x.col(i) = g * gradient_scale[i];
         } else {
             energies[i] = pot.value(xt);
         }
     }
     if (check_finite && !energies.allFinite())
         throw NumericalError("non-finite incremental potential in the training batch");
-    // The objective's weights w_i / n: divided (not multiplied by 1/n) so the numbers are
-    // those of the integrator loss written out before this class existed.
-    VectorXd weights = options.weights;
-    if (weights.size() == 0) weights.setOnes(B);
     out.objective = weights.dot(energies) / options.normalization;
-    if (gradient) grad_x = grad_x * (weights / options.normalization).asDiagonal();
 }
 
 LatentEnergies LatentPotential::evaluate_positions(const Eigen::Ref<const MatrixXd>& X,
