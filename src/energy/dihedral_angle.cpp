@@ -56,21 +56,17 @@ double dihedral_angle(const HingeVector& xe, HingeVector* gradient, HingeMatrix*
         // t_k = (x_k − x0)·e/|e|² the foot of the opposite vertex on the edge:
         //   ∂θ/∂x1 = −t2 ∂θ/∂x2 − t3 ∂θ/∂x3,  ∂θ/∂x0 = (t2 − 1) ∂θ/∂x2 + (t3 − 1) ∂θ/∂x3.
         // The same numbers as the z-route below (test_dihedral_angle compares them), in a
-        // third of the time: this is the training losses' per-hinge pass.
-        const Vector3d N1 = e.cross(u);
-        const Vector3d N2 = v.cross(e);
-        const double ee = e.squaredNorm();
-        const double len = std::sqrt(ee);
-        const double theta = std::atan2(-len * N1.dot(v), N1.dot(N2));
-        if (gradient == nullptr) return theta;
-        const Vector3d g2 = (-len / N1.squaredNorm()) * N1;
-        const Vector3d g3 = (-len / N2.squaredNorm()) * N2;
-        const double t2 = u.dot(e) / ee;
-        const double t3 = v.dot(e) / ee;
-        gradient->segment<3>(0) = (t2 - 1.0) * g2 + (t3 - 1.0) * g3;
-        gradient->segment<3>(3) = -t2 * g2 - t3 * g3;
-        gradient->segment<3>(6) = g2;
-        gradient->segment<3>(9) = g3;
+        // third of the time; written once, on plain arrays (dihedral_angle_gradient).
+        double x[4][3], g[4][3];
+        for (int a = 0; a < 4; ++a) {
+            for (int i = 0; i < 3; ++i) x[a][i] = xe[3 * a + i];
+        }
+        const double theta = dihedral_angle_gradient(x, g);
+        if (gradient != nullptr) {
+            for (int a = 0; a < 4; ++a) {
+                for (int i = 0; i < 3; ++i) (*gradient)[3 * a + i] = g[a][i];
+            }
+        }
         return theta;
     }
 

@@ -12,7 +12,9 @@
 //   Y = −|e| det(e, u, v),   X = (e·u)(e·v) − |e|² (u·v),
 // which makes exact first and second derivatives short (see dihedral_angle.cpp).
 #include <Eigen/Core>
+#include <cmath>
 
+#include "core/lane_math.hpp"
 #include "core/types.hpp"
 
 namespace lb {
@@ -26,6 +28,37 @@ double dihedral_angle(const HingeVector& xe);
 /// θ with ∂θ/∂xe (12) and, if `hessian` is non-null, ∂²θ/∂xe² (12×12, symmetric).
 /// Undefined for a degenerate hinge (zero-area triangle or zero-length edge).
 double dihedral_angle(const HingeVector& xe, HingeVector* gradient, HingeMatrix* hessian);
+
+/// θ and ∂θ/∂x_a (written to g[a]) of the hinge x[0..3] on plain arrays, θ by lane_atan2: the
+/// gradient-only route of dihedral_angle (derivation in dihedral_angle.cpp), in a form that
+/// vectorises across hinges (ShellHingeBending's training pass inlines it into SIMD lanes).
+inline double dihedral_angle_gradient(const double (&x)[4][3], double (&g)[4][3])
+{
+    double e[3], u[3], v[3];
+    for (int i = 0; i < 3; ++i) {
+        e[i] = x[1][i] - x[0][i];
+        u[i] = x[2][i] - x[0][i];
+        v[i] = x[3][i] - x[0][i];
+    }
+    const double n1[3] = {e[1] * u[2] - e[2] * u[1], e[2] * u[0] - e[0] * u[2], e[0] * u[1] - e[1] * u[0]};
+    const double n2[3] = {v[1] * e[2] - v[2] * e[1], v[2] * e[0] - v[0] * e[2], v[0] * e[1] - v[1] * e[0]};
+    auto dot = [](const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    const double ee = dot(e, e);
+    const double len = std::sqrt(ee);
+    const double theta = lane_atan2(-len * dot(n1, v), dot(n1, n2));
+    const double s2 = -len / dot(n1, n1);
+    const double s3 = -len / dot(n2, n2);
+    const double t2 = dot(u, e) / ee;
+    const double t3 = dot(v, e) / ee;
+    for (int i = 0; i < 3; ++i) {
+        const double g2 = s2 * n1[i], g3 = s3 * n2[i];
+        g[0][i] = (t2 - 1.0) * g2 + (t3 - 1.0) * g3;
+        g[1][i] = -t2 * g2 - t3 * g3;
+        g[2][i] = g2;
+        g[3][i] = g3;
+    }
+    return theta;
+}
 
 /// Wrap an angle difference into (−π, π].
 double wrap_angle(double angle);

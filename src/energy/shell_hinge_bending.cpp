@@ -4,46 +4,26 @@
 #include <sstream>
 
 #include "core/error.hpp"
-#include "core/lane_math.hpp"
 #include "energy/element_input.hpp"
 
 namespace lb {
 namespace {
 
-/// E_h = w_h (θ − θ̄)² of one hinge (p = {w_h, θ̄}) and its gradient 2 w_h (θ − θ̄) ∇θ, with θ
-/// and ∇θ from the triangle normals as in dihedral_angle (its gradient-only route, derived
-/// there) and θ by lane_atan2. One SIMD lane of the training pass, or one element
+/// E_h = w_h (θ − θ̄)² of one hinge (p = {w_h, θ̄}) and its gradient 2 w_h (θ − θ̄) ∇θ, θ and ∇θ
+/// by dihedral_angle_gradient. One SIMD lane of the training pass, or one element
 /// (local_value_gradient).
 const auto kHingeKernel = [](const double (&x)[4][3], const auto& p, double (&g)[4][3]) {
     constexpr double kPi = 3.14159265358979323846;
     const double w = p[0], rest_angle = p[1];
-    double e[3], u[3], v[3];
-    for (int i = 0; i < 3; ++i) {
-        e[i] = x[1][i] - x[0][i];
-        u[i] = x[2][i] - x[0][i];
-        v[i] = x[3][i] - x[0][i];
-    }
-    const double n1[3] = {e[1] * u[2] - e[2] * u[1], e[2] * u[0] - e[0] * u[2], e[0] * u[1] - e[1] * u[0]};
-    const double n2[3] = {v[1] * e[2] - v[2] * e[1], v[2] * e[0] - v[0] * e[2], v[0] * e[1] - v[1] * e[0]};
-    auto dot = [](const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-    const double ee = dot(e, e);
-    const double len = std::sqrt(ee);
-    const double theta = lane_atan2(-len * dot(n1, v), dot(n1, n2));
-    // θ, θ̄ ∈ [−π, π], so one shift wraps the difference into (−π, π] (wrap_angle).
-    double delta = theta - rest_angle;
+    double g_theta[4][3];
+    // θ, θ̄ ∈ [−π, π], so one shift wraps the difference into (−π, π] (wrap_angle, whose
+    // fmod branch would keep the lane loop scalar).
+    double delta = dihedral_angle_gradient(x, g_theta) - rest_angle;
     delta = delta > kPi ? delta - 2.0 * kPi : delta;
     delta = delta <= -kPi ? delta + 2.0 * kPi : delta;
     const double c = 2.0 * w * delta;
-    const double s2 = -c * len / dot(n1, n1);
-    const double s3 = -c * len / dot(n2, n2);
-    const double t2 = dot(u, e) / ee;
-    const double t3 = dot(v, e) / ee;
-    for (int i = 0; i < 3; ++i) {
-        const double g2 = s2 * n1[i], g3 = s3 * n2[i];
-        g[0][i] = (t2 - 1.0) * g2 + (t3 - 1.0) * g3;
-        g[1][i] = -t2 * g2 - t3 * g3;
-        g[2][i] = g2;
-        g[3][i] = g3;
+    for (int a = 0; a < 4; ++a) {
+        for (int i = 0; i < 3; ++i) g[a][i] = c * g_theta[a][i];
     }
     return w * delta * delta;
 };
