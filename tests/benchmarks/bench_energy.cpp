@@ -8,6 +8,8 @@
 // whose projection clamps the analytic eigensystem of ∂P/∂F, the element benchmark also
 // runs the generic 12×12 eigenvalue clamp (project_psd, arg 2) for reference.
 // Counters: nnz of the assembled lower triangle, elements, and elements per second.
+// value_gradient/<energy>: the training losses' hot loop instead (add_value_gradient, the
+// serial pass vectorised across elements, energy/element_lanes.hpp), one thread.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -131,5 +133,48 @@ BENCHMARK(BM_Rods_Assemble)
     ->Args({0, 36})
     ->ArgNames({"project", "vertices_per_rod"})
     ->Unit(benchmark::kMillisecond);
+
+// add_value_gradient as the trainer calls it, once per sample inside its parallel batch
+// loop: on one thread, the serial lane pass.
+void run_value_gradient(benchmark::State& state, const Mesh& mesh, const Energy& energy, double amplitude)
+{
+    const VectorXd x = deformed_state(mesh, amplitude);
+    VectorXd g = VectorXd::Zero(x.size());
+    for (auto _ : state) {
+        double value = 0.0;
+#pragma omp parallel num_threads(1)
+        value = energy.add_value_gradient(x, 1.0, g);
+        benchmark::DoNotOptimize(value);
+        benchmark::DoNotOptimize(g.data());
+        benchmark::ClobberMemory();
+    }
+    state.counters["elements"] = double(energy.num_elements());
+    state.counters["elements/s"] =
+        benchmark::Counter(double(energy.num_elements()), benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_ValueGradient_ShellHinge(benchmark::State& state)
+{
+    static const Mesh mesh = make_cloth_grid(ClothGridOptions());
+    const ShellHingeBending energy(mesh.rest_positions, shell_hinge_stencils(mesh.elements), 1e5, 0.3, 1e-3);
+    run_value_gradient(state, mesh, energy, 0.01);
+}
+BENCHMARK(BM_ValueGradient_ShellHinge)->Name("value_gradient/shell_hinge")->Unit(benchmark::kMicrosecond);
+
+void BM_ValueGradient_ShellMembrane(benchmark::State& state)
+{
+    static const Mesh mesh = make_cloth_grid(ClothGridOptions());
+    const ShellMembrane energy(mesh.rest_positions, mesh.elements, 1e5, 0.3, 1e-3);
+    run_value_gradient(state, mesh, energy, 0.01);
+}
+BENCHMARK(BM_ValueGradient_ShellMembrane)->Name("value_gradient/shell_membrane")->Unit(benchmark::kMicrosecond);
+
+void BM_ValueGradient_TetStVK(benchmark::State& state)
+{
+    static const Mesh mesh = armadillo_sized_beam();
+    const TetStVK energy(mesh.rest_positions, mesh.elements, 1e7, 0.3);
+    run_value_gradient(state, mesh, energy, 0.005);
+}
+BENCHMARK(BM_ValueGradient_TetStVK)->Name("value_gradient/tet_stvk")->Unit(benchmark::kMicrosecond);
 
 } // namespace
