@@ -100,15 +100,28 @@ void BM_TetStVK_ElementHessian(benchmark::State& state)
 }
 BENCHMARK(BM_TetStVK_ElementHessian)->Arg(1)->Arg(0)->Arg(2)->ArgName("project")->Unit(benchmark::kMillisecond);
 
+/// The cloth grid (16×12 vertices, 1 m × 0.75 m) and its two shell energies.
+const Mesh& cloth_grid()
+{
+    static const Mesh mesh = make_cloth_grid(ClothGridOptions());
+    return mesh;
+}
+std::shared_ptr<ShellMembrane> cloth_membrane()
+{
+    return std::make_shared<ShellMembrane>(cloth_grid().rest_positions, cloth_grid().elements, 1e5, 0.3, 1e-3);
+}
+std::shared_ptr<ShellHingeBending> cloth_hinges()
+{
+    return std::make_shared<ShellHingeBending>(cloth_grid().rest_positions, shell_hinge_stencils(cloth_grid().elements),
+                                               1e5, 0.3, 1e-3);
+}
+
 void BM_Shell_Assemble(benchmark::State& state)
 {
-    ClothGridOptions options; // 16×12 vertices, 1 m × 0.75 m
-    static const Mesh mesh = make_cloth_grid(options);
     EnergySum energies;
-    energies.add(std::make_shared<ShellMembrane>(mesh.rest_positions, mesh.elements, 1e5, 0.3, 1e-3));
-    energies.add(std::make_shared<ShellHingeBending>(mesh.rest_positions, shell_hinge_stencils(mesh.elements), 1e5,
-                                                     0.3, 1e-3));
-    run_assembly(state, mesh, energies, 0.01);
+    energies.add(cloth_membrane());
+    energies.add(cloth_hinges());
+    run_assembly(state, cloth_grid(), energies, 0.01);
 }
 BENCHMARK(BM_Shell_Assemble)->Arg(1)->Arg(0)->ArgName("project")->Unit(benchmark::kMicrosecond);
 
@@ -155,17 +168,13 @@ void run_value_gradient(benchmark::State& state, const Mesh& mesh, const Energy&
 
 void BM_ValueGradient_ShellHinge(benchmark::State& state)
 {
-    static const Mesh mesh = make_cloth_grid(ClothGridOptions());
-    const ShellHingeBending energy(mesh.rest_positions, shell_hinge_stencils(mesh.elements), 1e5, 0.3, 1e-3);
-    run_value_gradient(state, mesh, energy, 0.01);
+    run_value_gradient(state, cloth_grid(), *cloth_hinges(), 0.01);
 }
 BENCHMARK(BM_ValueGradient_ShellHinge)->Name("value_gradient/shell_hinge")->Unit(benchmark::kMicrosecond);
 
 void BM_ValueGradient_ShellMembrane(benchmark::State& state)
 {
-    static const Mesh mesh = make_cloth_grid(ClothGridOptions());
-    const ShellMembrane energy(mesh.rest_positions, mesh.elements, 1e5, 0.3, 1e-3);
-    run_value_gradient(state, mesh, energy, 0.01);
+    run_value_gradient(state, cloth_grid(), *cloth_membrane(), 0.01);
 }
 BENCHMARK(BM_ValueGradient_ShellMembrane)->Name("value_gradient/shell_membrane")->Unit(benchmark::kMicrosecond);
 
