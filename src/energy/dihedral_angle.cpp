@@ -31,9 +31,7 @@ double wrap_angle(double angle)
     // fmod is the identity below 2π, and the differences of two angles in (−π, π] (the
     // hinge energy's θ − θ̄) always are: skip it there, same result, no division.
     if (!(std::abs(angle) < two_pi)) angle = std::fmod(angle, two_pi);
-    if (angle > M_PI) angle -= two_pi;
-    if (angle <= -M_PI) angle += two_pi;
-    return angle;
+    return wrap_angle_difference(angle);
 }
 
 double dihedral_angle(const HingeVector& xe)

@@ -65,7 +65,17 @@ inline double dihedral_angle_gradient(const double (&x)[4][3], double (&g)[4][3]
     return theta;
 }
 
-/// Wrap an angle difference into (−π, π].
+/// Wrap an angle difference into (−π, π] when it lies in (−3π, 3π], as the difference of two
+/// angles in [−π, π] (θ − θ̄ of a hinge) does: one conditional shift each way, no fmod, so it
+/// stays inside vectorised lane loops.
+inline double wrap_angle_difference(double angle)
+{
+    constexpr double kPi = 3.14159265358979323846;
+    angle = angle > kPi ? angle - 2.0 * kPi : angle;
+    return angle <= -kPi ? angle + 2.0 * kPi : angle;
+}
+
+/// Wrap any angle into (−π, π].
 double wrap_angle(double angle);
 
 } // namespace lb

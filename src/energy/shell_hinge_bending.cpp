@@ -13,14 +13,11 @@ namespace {
 /// by dihedral_angle_gradient. One SIMD lane of the training pass, or one element
 /// (local_value_gradient).
 const auto kHingeKernel = [](const double (&x)[4][3], const auto& p, double (&g)[4][3]) {
-    constexpr double kPi = 3.14159265358979323846;
     const double w = p[0], rest_angle = p[1];
     double g_theta[4][3];
-    // θ, θ̄ ∈ [−π, π], so one shift wraps the difference into (−π, π] (wrap_angle, whose
-    // fmod branch would keep the lane loop scalar).
-    double delta = dihedral_angle_gradient(x, g_theta) - rest_angle;
-    delta = delta > kPi ? delta - 2.0 * kPi : delta;
-    delta = delta <= -kPi ? delta + 2.0 * kPi : delta;
+    // θ, θ̄ ∈ [−π, π]: wrap_angle_difference, not wrap_angle, whose fmod branch would keep
+    // the lane loop scalar.
+    const double delta = wrap_angle_difference(dihedral_angle_gradient(x, g_theta) - rest_angle);
     const double c = 2.0 * w * delta;
     for (int a = 0; a < 4; ++a) {
         for (int i = 0; i < 3; ++i) g[a][i] = c * g_theta[a][i];
