@@ -109,7 +109,7 @@ public:
         save_embedding_metrics(out, embeddings);
 
         long long epochs = 0, budget = 0;
-        double seconds_trained = 0.0;
+        double seconds_trained = 0.0, seconds_before = 0.0;
         bool time_limited = false;
         const int budgets[3] = {o.stage1_epochs, o.stage2_epochs, o.stage3_epochs};
         for (int k = 0; k < 3; ++k) {
@@ -128,14 +128,16 @@ public:
             epochs += r.loop.epochs_run;
             budget += budgets[k];
             seconds_trained += r.loop.seconds;
+            seconds_before += r.loop.seconds_before;  // a resumed stage's earlier processes
             time_limited = time_limited || r.loop.time_limited;
         }
         out.set_attribute("/", "tan.window", (long long)trainer.window());
         // The budget attributes every learned method writes (the tables' "training" column):
-        // epochs summed over the stages that ran; seconds with the set-up (metrics, copies).
+        // epochs summed over the stages that ran; seconds with the set-up (metrics, copies) and
+        // the earlier processes' training of resumed stages.
         out.set_attribute("/", "epochs_run", epochs);
         out.set_attribute("/", "epochs_budget", budget);
-        out.set_attribute("/", "train_seconds", timer.seconds());
+        out.set_attribute("/", "train_seconds", seconds_before + timer.seconds());
         out.set_attribute("/", "max_seconds", o.max_seconds);
         out.set_attribute("/", "time_limited", (long long)time_limited);
         out.set_attribute("/", "stopped_early", 0LL);

@@ -61,8 +61,8 @@ void log_warn(const char* format, ...)
     va_end(args);
 }
 
-Progress::Progress(std::string label, long total, double interval_seconds)
-    : m_label(std::move(label)), m_total(total), m_interval(interval_seconds),
+Progress::Progress(std::string label, long total, double interval_seconds, long first)
+    : m_label(std::move(label)), m_total(total), m_first(first), m_interval(interval_seconds),
       m_start(std::chrono::steady_clock::now()), m_last(m_start)
 {
 }
@@ -75,7 +75,7 @@ void Progress::update(long done, const std::string& extra)
     }
     m_last = now;
     const double elapsed = std::chrono::duration<double>(now - m_start).count();
-    const double eta = done > 0 ? elapsed * double(m_total - done) / double(done) : 0.0;
+    const double eta = done > m_first ? elapsed * double(m_total - done) / double(done - m_first) : 0.0;
     log_info("%s %ld/%ld  elapsed %.1fs  eta %.1fs  %s", m_label.c_str(), done, m_total, elapsed,
              eta, extra.c_str());
 }

@@ -21,7 +21,9 @@ void log_warn(const char* format, ...) __attribute__((format(printf, 1, 2)));
 /// `interval` seconds and once at the end.
 class Progress {
 public:
-    Progress(std::string label, long total, double interval_seconds = 2.0);
+    /// @param first  items already done when this object is made (a resumed run): the ETA is
+    ///               extrapolated from the items done since.
+    Progress(std::string label, long total, double interval_seconds = 2.0, long first = 0);
     /// Report that `done` items are finished; `extra` is appended to the line.
     void update(long done, const std::string& extra = "");
     void finish(const std::string& extra = "");
@@ -29,6 +31,7 @@ public:
 private:
     std::string m_label;
     long m_total;
+    long m_first;
     double m_interval;
     std::chrono::steady_clock::time_point m_start;
     std::chrono::steady_clock::time_point m_last;

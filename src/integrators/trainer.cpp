@@ -387,7 +387,7 @@ IntegratorTrainSummary IntegratorTrainer::train(LatentMlpModel& model, const Tra
     prepare(model, samples);
     IntegratorLearner learner(*this, model, samples);
     IntegratorTrainSummary summary = nn::run_training_loop(learner, loop_options(), fingerprint);
-    summary.seconds = timer.seconds();  // with the set-up above
+    summary.seconds = summary.seconds_before + timer.seconds();  // with the set-up above
     return summary;
 }
 

@@ -488,7 +488,8 @@ void finetune_physics(Autoencoder& ae, const Dataset& data, const AutoencoderOpt
     summary.physics_ephys_before = before.ephys;
     summary.physics_ephys_after = after.ephys;
     summary.physics_epochs_run = run.epochs_run;
-    summary.physics_seconds = timer.seconds();
+    summary.physics_seconds = run.seconds_before + timer.seconds();
+    summary.seconds_before += run.seconds_before;  // the earlier processes' fine-tuning
     summary.time_limited = summary.time_limited || run.time_limited;
     summary.interrupted = summary.interrupted || run.interrupted;
     if (o.progress)
@@ -571,7 +572,7 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
         finetune_physics(ae, data, options, summary);
         summary.validation_relative_rmse = ae.relative_rmse(val_positions, val_targets);
     }
-    summary.seconds = timer.seconds();
+    summary.seconds = summary.seconds_before + timer.seconds();
     if (options.progress)
         log_info("train-ae %s after %d epochs (best %d): validation MSE %.4e, relative RMSE %.4e, %.1fs",
                  summary.stopped_early ? "stopped early" : "finished", summary.epochs_run, summary.best_epoch,

@@ -25,6 +25,9 @@ struct Counters {
     double best_validation = std::numeric_limits<double>::infinity();
     int epochs_since_improvement = 0;
     double last_loss = 0.0;
+    /// Wall-clock seconds of training up to the checkpoint, earlier processes included (0 from
+    /// a checkpoint written before it was recorded).
+    double seconds = 0.0;
 };
 
 void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, Learner& learner,
@@ -45,6 +48,7 @@ void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, L
         f.set_attribute("/", "best_validation", exact_text(c.best_validation));
         f.set_attribute("/", "epochs_since_improvement", (long long)c.epochs_since_improvement);
         f.set_attribute("/", "last_loss", exact_text(c.last_loss));
+        f.set_attribute("/", "train_seconds", exact_text(c.seconds));
         learner.save_state(f);
     });
 }
@@ -119,6 +123,10 @@ std::string read_checkpoint(const std::string& path, const Fingerprint& fingerpr
         t.best_validation = std::strtod(f.attribute_string("/", "best_validation").c_str(), nullptr);
         t.epochs_since_improvement = int(since);
         t.last_loss = std::strtod(f.attribute_string("/", "last_loss").c_str(), nullptr);
+        if (f.has_attribute("/", "train_seconds")) {
+            t.seconds = std::strtod(f.attribute_string("/", "train_seconds").c_str(), nullptr);
+            if (!(t.seconds >= 0.0) || !std::isfinite(t.seconds)) return "its training time is not a finite number ≥ 0";
+        }
         if (std::isnan(t.best_validation) || !std::isfinite(t.last_loss))
             return "its loss record is not finite";
         learner.load_state(f);  // all or nothing; below nothing can fail (shapes checked)
@@ -257,14 +265,18 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
         }
     }
 
+    // The wall-clock budget and the reported time count the earlier processes' training too.
+    const double seconds_before = c.seconds;
+    const auto seconds = [&] { return seconds_before + timer.seconds(); };
     int last_saved = c.epoch;
     auto checkpoint = [&] {
         if (path.empty()) return;
+        c.seconds = seconds();
         write_checkpoint(path, fingerprint, learner, params, adam, c);
         last_saved = c.epoch;
     };
     auto early_stop = [&] { return validation && o.patience > 0 && c.epochs_since_improvement >= o.patience; };
-    Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30);
+    Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30, c.epoch);
     while (c.epoch < o.epochs && !early_stop()) {
         c.last_loss = runner.run(c.epoch);
         ++c.epoch;
@@ -279,7 +291,7 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
             summary.interrupted = true;
             break;
         }
-        if (o.max_seconds > 0.0 && timer.seconds() > o.max_seconds) {
+        if (o.max_seconds > 0.0 && seconds() > o.max_seconds) {
             summary.time_limited = c.epoch < o.epochs;
             break;
         }
@@ -292,7 +304,8 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
     summary.best_epoch = c.best_epoch;
     summary.best_validation = c.best_validation;
     summary.final_loss = c.last_loss;
-    summary.seconds = timer.seconds();
+    summary.seconds = seconds();
+    summary.seconds_before = seconds_before;
     if (o.progress) {
         char extra[128];
         std::snprintf(extra, sizeof extra, "final loss %.6g%s%s", c.last_loss,

@@ -62,7 +62,8 @@ public:
 /// What every training run takes besides its hyper-parameters (the autoencoder's, the
 /// integrator's and any learned method's options derive from it).
 struct TrainingRunOptions {
-    /// Stop after this many seconds (0: no limit); the summary says so.
+    /// Stop after this many seconds of training (0: no limit), a resumed run's earlier
+    /// processes included (as recorded in its checkpoint); the summary says so.
     double max_seconds = 0.0;
     /// Checkpoint file (empty: none), written every checkpoint_every epochs and at the end.
     /// It is resumed only if its fingerprint (resolved options and content hashes of the
@@ -99,7 +100,11 @@ struct TrainingLoopSummary {
     int best_epoch = 0;            ///< with validation: the epoch whose weights were kept
     double best_validation = 0.0;
     double final_loss = 0.0;       ///< the last epoch's training loss
+    /// Wall-clock seconds of training, a resumed run's earlier processes included (their time is
+    /// unknown, so left out, if the checkpoint was written before it was recorded).
     double seconds = 0.0;
+    /// Of `seconds`, the earlier processes' (0 unless resumed): for callers that time more than the loop.
+    double seconds_before = 0.0;
     bool resumed = false;
     bool stopped_early = false;
     bool time_limited = false;

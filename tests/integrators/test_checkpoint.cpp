@@ -195,5 +195,27 @@ TEST(IntegratorCheckpoint, FinishedRunIsResumedWithItsLoss)
     EXPECT_FALSE(fs::exists(ckpt + ".stale"));
 }
 
+// A resumed run's training time includes the earlier processes' (the tables' budget column
+// and the wall-clock cap): the checkpoint records it, the resumed summary starts from it.
+TEST(IntegratorCheckpoint, ResumedRunCountsTheEarlierTrainingTime)
+{
+    TinyProblem& p = tiny();
+    const std::string ckpt = fresh_path("seconds");
+    const IntegratorTrainOptions o = base_options(ckpt);
+    const IntegratorTrainSummary first = train(p, *p.ae, o, p.samples);
+    ASSERT_GT(first.seconds, 0.0);
+    double recorded = -1.0;
+    {
+        const h5::File f = h5::File::open(ckpt);
+        ASSERT_TRUE(f.has_attribute("/", "train_seconds"));
+        recorded = std::stod(f.attribute_string("/", "train_seconds"));
+    }
+    EXPECT_GT(recorded, 0.0);
+    EXPECT_LE(recorded, first.seconds);
+    const IntegratorTrainSummary again = train(p, *p.ae, o, p.samples);
+    ASSERT_TRUE(again.resumed);
+    EXPECT_GE(again.seconds, recorded);
+}
+
 } // namespace
 } // namespace lb
