@@ -137,12 +137,13 @@ public:
         // the earlier processes' training of resumed stages.
         out.set_attribute("/", "epochs_run", epochs);
         out.set_attribute("/", "epochs_budget", budget);
-        out.set_attribute("/", "train_seconds", seconds_before + timer.seconds());
+        const double seconds_in_all = seconds_before + timer.seconds();
+        out.set_attribute("/", "train_seconds", seconds_in_all);
         out.set_attribute("/", "max_seconds", o.max_seconds);
         out.set_attribute("/", "time_limited", (long long)time_limited);
         out.set_attribute("/", "stopped_early", 0LL);
         log_info("tan_physics_mlp: %lld epochs over the stages (%.1f s training, %.1f s in all), K = %ld", epochs,
-                 seconds_trained, timer.seconds(), long(trainer.window()));
+                 seconds_trained, seconds_in_all, long(trainer.window()));
     }
 
     std::unique_ptr<Integrator> load(const MethodInputs& in, const h5::File* artefact,
