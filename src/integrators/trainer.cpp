@@ -225,8 +225,8 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
 
     // Self-supervised: the incremental potential of the decoded prediction, each sample
     // weighted by data balancing, averaged over the batch.
-    const MatrixXd X1 = decoded_inputs(batch, 1);
-    const MatrixXd X2 = decoded_inputs(batch, 2);
+    MatrixXd X1, X2;
+    decoded_inputs(batch, X1, X2);
     LatentEnergyOptions options;
     options.gradient = with_gradient;
     options.weights = m_options.data_balancing ? balancing_weights(X1, X2) : VectorXd::Ones(B);
@@ -242,20 +242,30 @@ void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
     m_decoded_prev2 = m_potential.decode(samples.z_prev2, samples.targets_prev2);
 }
 
-MatrixXd IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, int which)
+void IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, MatrixXd& X1, MatrixXd& X2)
 {
-    const MatrixXd& z = which == 1 ? batch.z_prev : batch.z_prev2;
-    const MatrixXd& targets = which == 1 ? batch.targets_prev : batch.targets_prev2;
-    const MatrixXd& cache = which == 1 ? m_decoded_prev : m_decoded_prev2;
-    if (cache.size() == 0 || batch.source.size() != size_t(batch.size())) return m_potential.decode(z, targets);
-    MatrixXd X(cache.rows(), batch.size());
-#pragma omp parallel for schedule(static) if (batch.clean >= kParallelColumns)
-    for (Index i = 0; i < batch.clean; ++i) X.col(i) = cache.col(batch.source[size_t(i)]);
-    const Index noisy = batch.size() - batch.clean;
-    if (noisy > 0) {
-        X.rightCols(noisy) = m_potential.decode(z.rightCols(noisy), targets.rightCols(noisy));
+    const Index B = batch.size();
+    if (m_decoded_prev.size() == 0 || batch.source.size() != size_t(B)) {
+        X1 = m_potential.decode(batch.z_prev, batch.targets_prev);
+        X2 = m_potential.decode(batch.z_prev2, batch.targets_prev2);
+        return;
     }
-    return X;
+    X1.resize(m_decoded_prev.rows(), B);
+    X2.resize(m_decoded_prev2.rows(), B);
+#pragma omp parallel for schedule(static) if (batch.clean >= kParallelColumns)
+    for (Index i = 0; i < batch.clean; ++i) {
+        X1.col(i) = m_decoded_prev.col(batch.source[size_t(i)]);
+        X2.col(i) = m_decoded_prev2.col(batch.source[size_t(i)]);
+    }
+    const Index noisy = B - batch.clean;
+    if (noisy == 0) return;
+    // Both steps' noisy latents in one pass: twice the columns per GEMM, one parallel region.
+    MatrixXd Z(batch.z_prev.rows(), 2 * noisy), targets(batch.targets_prev.rows(), 2 * noisy);
+    Z << batch.z_prev.rightCols(noisy), batch.z_prev2.rightCols(noisy);
+    targets << batch.targets_prev.rightCols(noisy), batch.targets_prev2.rightCols(noisy);
+    const MatrixXd X = m_potential.decode(Z, targets);
+    X1.rightCols(noisy) = X.leftCols(noisy);
+    X2.rightCols(noisy) = X.rightCols(noisy);
 }
 
 double IntegratorTrainer::loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch)

@@ -163,8 +163,9 @@ public:
 
 private:
     double evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient);
-    /// Decoded x_{t−1} (which = 1) or x_{t−2} (which = 2) of the batch columns.
-    MatrixXd decoded_inputs(const IntegratorBatch& batch, int which);
+    /// Decoded x_{t−1} (X1) and x_{t−2} (X2) of the batch columns: the clean columns from
+    /// the cache, the noisy copies' latents of both steps in one decoder pass.
+    void decoded_inputs(const IntegratorBatch& batch, MatrixXd& X1, MatrixXd& X2);
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;

@@ -165,7 +165,9 @@ void BcRelativeEncoding::to_positions_into(const Eigen::Ref<const Eigen::VectorX
     positions_of_frame(f.data(), targets.data(), x.data());
 }
 
-MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& targets) const
+template <typename Scalar>
+MatrixXd BcRelativeEncoding::positions_of_columns(const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& F,
+                                                  const MatrixXd& targets) const
 {
     const Index B = static_cast<Index>(m_bc_indices.size());
     if (F.rows() != m_num_features || targets.rows() != 3 * B || targets.cols() != F.cols())
@@ -180,7 +182,19 @@ MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& tar
     return X;
 }
 
-MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const
+MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& targets) const
+{
+    return positions_of_columns(F, targets);
+}
+
+MatrixXd BcRelativeEncoding::to_positions_from_float(const Eigen::MatrixXf& F, const MatrixXd& targets) const
+{
+    return positions_of_columns(F, targets);
+}
+
+template <typename Scalar>
+void BcRelativeEncoding::gradient_into(const MatrixXd& grad_x, const MatrixXd& targets,
+                                       Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& G) const
 {
     const Index B = static_cast<Index>(m_bc_indices.size());
     if (grad_x.rows() != m_num_dofs || targets.rows() != 3 * B || targets.cols() != grad_x.cols())
@@ -188,19 +202,36 @@ MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const 
                                     " × S gradients and " + std::to_string(3 * B) + " × S targets, got " +
                                     std::to_string(grad_x.rows()) + " × " + std::to_string(grad_x.cols()) + " and " +
                                     std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
-    if (!m_rod_relative && m_frame == EncodingFrame::translation) return grad_x;  // P = I
-    MatrixXd G(m_num_features, grad_x.cols());
+    G.resize(m_num_features, grad_x.cols());
+    const bool identity = !m_rod_relative && m_frame == EncodingFrame::translation;  // P = I
 #pragma omp parallel for schedule(static) if (grad_x.cols() >= kParallelColumns)
     for (Index s = 0; s < grad_x.cols(); ++s) {
+        if (identity) {
+            G.col(s) = grad_x.col(s).template cast<Scalar>();
+            continue;
+        }
         const Matrix3d Rt = frame_rotation(targets.col(s).data()).transpose();
         if (m_rod_relative) {
             for (std::size_t k = 0; k < m_rod_vertices.size(); ++k)
-                G.col(s).segment<3>(3 * Index(k)) = Rt * grad_x.col(s).segment<3>(3 * Index(m_rod_vertices[k].first));
+                G.col(s).template segment<3>(3 * Index(k)) =
+                    (Rt * grad_x.col(s).segment<3>(3 * Index(m_rod_vertices[k].first))).template cast<Scalar>();
         } else {
-            for (Index i = 0; i < m_num_dofs / 3; ++i) G.col(s).segment<3>(3 * i) = Rt * grad_x.col(s).segment<3>(3 * i);
+            for (Index i = 0; i < m_num_dofs / 3; ++i)
+                G.col(s).template segment<3>(3 * i) = (Rt * grad_x.col(s).segment<3>(3 * i)).template cast<Scalar>();
         }
     }
+}
+
+MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const
+{
+    MatrixXd G;
+    gradient_into(grad_x, targets, G);
     return G;
+}
+
+void BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets, Eigen::MatrixXf& G) const
+{
+    gradient_into(grad_x, targets, G);
 }
 
 } // namespace lb

@@ -53,6 +53,9 @@ public:
     /// @param targets  3B × S Dirichlet targets (xyz interleaved, one column per frame)
     /// @return 3N × S positions
     MatrixXd to_positions(const MatrixXd& F, const MatrixXd& targets) const;
+    /// The same from single-precision features (the float32 decoder's output), each
+    /// feature widened exactly: the positions equal those of F.cast<double>().
+    MatrixXd to_positions_from_float(const Eigen::MatrixXf& F, const MatrixXd& targets) const;
     /// One frame without allocation (the inference path): x (3N) from features f (F,
     /// float or double) and the Dirichlet targets (3B).
     void to_positions_into(const Eigen::Ref<const VectorXd>& f, const Eigen::Ref<const VectorXd>& targets,
@@ -62,6 +65,9 @@ public:
     /// Chain rule through to_positions at the same targets (3B × S; the rigid frame's
     /// R depends on them): 3N × S position gradients → F × S.
     MatrixXd gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const;
+    /// The same rounded to single precision into G (the float32 decoder's VJP input):
+    /// equal to gradient_to_features(grad_x, targets).cast<float>(), without the double copy.
+    void gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets, Eigen::MatrixXf& G) const;
     /// The rigid frame's rotation for the Dirichlet positions `p` (3B, xyz interleaved);
     /// the identity in the translation frame.
     Matrix3d frame_rotation(const double* p) const;
@@ -69,6 +75,13 @@ public:
 private:
     template <typename Scalar>
     void positions_of_frame(const Scalar* f, const double* targets, double* x) const;
+    template <typename Scalar>
+    MatrixXd positions_of_columns(const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& F,
+                                  const MatrixXd& targets) const;
+    /// gradient_to_features into G of either precision; shapes checked.
+    template <typename Scalar>
+    void gradient_into(const MatrixXd& grad_x, const MatrixXd& targets,
+                       Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& G) const;
 
     /// Mean of the Dirichlet vertices of one 3N position vector.
     Vector3d bc_mean(const Eigen::Ref<const VectorXd>& x) const;

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <type_traits>
 
 #include "core/error.hpp"
 
@@ -68,8 +69,7 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
     LatentEnergies out;
     MatrixXd X;
     if (decoder_frozen()) {
-        frozen_forward(Z, m_features, options.gradient);
-        X = positions_of(m_features, bc_targets);
+        X = frozen_positions(Z, bc_targets, options.gradient);
     } else {
         X = positions_of(m_autoencoder.decode_features(Z), bc_targets);
     }
@@ -79,7 +79,7 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
             for (int v : m_model.bc_indices()) out.grad_x.middleRows<3>(3 * Index(v)).setZero();
         }
         if (decoder_frozen())
-            frozen_vjp(m_autoencoder.encoding().gradient_to_features(out.grad_x, bc_targets), out.grad_z);
+            frozen_vjp(out.grad_x, bc_targets, out.grad_z);
         else
             out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x, bc_targets);
     }
@@ -151,24 +151,25 @@ void LatentPotential::freeze_decoder(bool float32)
         m_frozen = std::make_unique<nn::InferenceNetworkD>(m_autoencoder.decoder());
 }
 
-void LatentPotential::frozen_forward(const MatrixXd& Z, MatrixXd& features, bool record)
+MatrixXd LatentPotential::frozen_positions(const MatrixXd& Z, const MatrixXd& bc_targets, bool record)
 {
     if (m_frozen) {
-        m_frozen->forward_batch(Z, features, record);
-        return;
+        m_frozen->forward_batch(Z, m_features, record);
+        return positions_of(m_features, bc_targets);
     }
     m_float_in = Z.cast<float>();
     m_frozen_float->forward_batch(m_float_in, m_float_out, record);
-    features = m_float_out.cast<double>();
+    return positions_of(m_float_out, bc_targets);
 }
 
-void LatentPotential::frozen_vjp(const MatrixXd& grad_features, MatrixXd& grad_z)
+void LatentPotential::frozen_vjp(const MatrixXd& grad_x, const MatrixXd& bc_targets, MatrixXd& grad_z)
 {
+    const BcRelativeEncoding& encoding = m_autoencoder.encoding();
     if (m_frozen) {
-        m_frozen->vjp_batch(grad_features, grad_z);
+        m_frozen->vjp_batch(encoding.gradient_to_features(grad_x, bc_targets), grad_z);
         return;
     }
-    m_float_in = grad_features.cast<float>();
+    encoding.gradient_to_features(grad_x, bc_targets, m_float_in);
     m_frozen_float->vjp_batch(m_float_in, m_float_out);
     grad_z = m_float_out.cast<double>();
 }
@@ -176,14 +177,18 @@ void LatentPotential::frozen_vjp(const MatrixXd& grad_features, MatrixXd& grad_z
 MatrixXd LatentPotential::decode(const MatrixXd& Z, const MatrixXd& bc_targets)
 {
     if (!decoder_frozen()) return positions_of(m_autoencoder.decode_features(Z), bc_targets);
-    MatrixXd features;
-    frozen_forward(Z, features, false);
-    return positions_of(features, bc_targets);
+    return frozen_positions(Z, bc_targets, false);
 }
 
-MatrixXd LatentPotential::positions_of(const MatrixXd& features, const MatrixXd& bc_targets) const
+template <typename Features>
+MatrixXd LatentPotential::positions_of(const Features& features, const MatrixXd& bc_targets) const
 {
-    MatrixXd X = m_autoencoder.encoding().to_positions(features, bc_targets);
+    const BcRelativeEncoding& encoding = m_autoencoder.encoding();
+    MatrixXd X;
+    if constexpr (std::is_same_v<typename Features::Scalar, float>)
+        X = encoding.to_positions_from_float(features, bc_targets);
+    else
+        X = encoding.to_positions(features, bc_targets);
     if (m_overwrite_dirichlet) {
         for (Index i = 0; i < X.cols(); ++i) overwrite_dirichlet(m_model.bc_indices(), bc_targets.col(i), X.col(i));
     }

@@ -125,13 +125,15 @@ private:
                                     const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options,
                                     bool check_finite);
 
-    /// decode()'s positions of the features the (frozen or live) decoder gave: the
-    /// encoding's, with the Dirichlet vertices overwritten if asked for.
-    MatrixXd positions_of(const MatrixXd& features, const MatrixXd& bc_targets) const;
-    /// The frozen copy's forward (features F × B; `record` keeps its tape for frozen_vjp)
-    /// and vector-Jacobian product, in its precision.
-    void frozen_forward(const MatrixXd& Z, MatrixXd& features, bool record);
-    void frozen_vjp(const MatrixXd& grad_features, MatrixXd& grad_z);
+    /// decode()'s positions of the features the (frozen or live) decoder gave, double or
+    /// float: the encoding's, with the Dirichlet vertices overwritten if asked for.
+    template <typename Features>
+    MatrixXd positions_of(const Features& features, const MatrixXd& bc_targets) const;
+    /// The frozen copy's forward to positions (`record` keeps its tape for frozen_vjp), and
+    /// the vector-Jacobian product of position gradients back to latents, in its precision
+    /// (the float copy takes its features and gives its VJP input without a double copy).
+    MatrixXd frozen_positions(const MatrixXd& Z, const MatrixXd& bc_targets, bool record);
+    void frozen_vjp(const MatrixXd& grad_x, const MatrixXd& bc_targets, MatrixXd& grad_z);
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;

@@ -324,19 +324,30 @@ void scale_rows_by_derivative(ActivationKind kind, const Vec& pre, M&& m)
     for (Index r = 0; r < m.rows(); ++r) m.row(r) *= activation_derivative(kind, pre[r]);
 }
 
-/// a ⊙= f'(pre) element-wise (arrays of the same shape), vectorised.
-template <typename A, typename P>
-void multiply_by_derivative(ActivationKind kind, const P& pre, A&& a)
+/// The batched forward's activation with its tape: a ← f(a) and d ← f'(a) element-wise
+/// (arrays of the same shape), vectorised, one exponential per element for Swish (the
+/// reverse pass then multiplies by d). The same expressions as apply_activation and
+/// f' = σ(1 + a(1 − σ)), so the values equal those computed separately.
+template <typename A, typename D>
+void activate_with_derivative(ActivationKind kind, A&& a, D&& d)
 {
     using S = typename std::decay_t<A>::Scalar;
     switch (kind) {
     case ActivationKind::swish: {
-        const auto sigma = (S(1) + (-pre).exp()).inverse().eval();
-        a *= sigma * (S(1) + pre * (S(1) - sigma));
+        const auto denominator = (S(1) + (-a).exp()).eval();
+        const auto sigma = denominator.inverse();
+        d = sigma * (S(1) + a * (S(1) - sigma));
+        a = a / denominator;
         break;
     }
-    case ActivationKind::tanh: a *= S(1) - pre.tanh().square(); break;
-    case ActivationKind::relu: a *= (pre > S(0)).template cast<S>(); break;
+    case ActivationKind::tanh:
+        a = a.tanh();
+        d = S(1) - a.square();
+        break;
+    case ActivationKind::relu:
+        d = (a > S(0)).template cast<S>();
+        a = a.max(S(0));
+        break;
     case ActivationKind::identity: break;
     }
 }
@@ -604,11 +615,11 @@ void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, 
                                     " input rows, got " + std::to_string(X.rows()));
     const Index B = X.cols();
     m_batch.resize(m_buffers.size());
-    m_batch_pre.resize(m_ops.size());
+    m_batch_derivative.resize(m_ops.size());
     m_batch[0] = X;
     for (std::size_t b = 1; b < m_batch.size(); ++b) m_batch[b].resize(m_buffer_size[b], B);
     for (std::size_t i = 0; i < m_ops.size(); ++i) {
-        if (record && m_ops[i].act != ActivationKind::identity) m_batch_pre[i].resize(m_ops[i].out, B);
+        if (record && m_ops[i].act != ActivationKind::identity) m_batch_derivative[i].resize(m_ops[i].out, B);
     }
     const int blocks = column_blocks(B);
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
@@ -631,9 +642,11 @@ void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, 
             case Op::Kind::add: dst += src; break;
             }
             if (op.act != ActivationKind::identity) {
-                if (record) m_batch_pre[i].middleCols(c0, n) = dst;
                 auto a = dst.array();
-                apply_activation(op.act, a);
+                if (record)
+                    activate_with_derivative(op.act, a, m_batch_derivative[i].middleCols(c0, n).array());
+                else
+                    apply_activation(op.act, a);
             }
         }
     }
@@ -659,7 +672,10 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
     for (int block = 0; block < blocks; ++block) {
         const Index c0 = B * block / blocks, n = B * (block + 1) / blocks - c0;
-        for (Matrix& a : m_batch_adjoint) a.middleCols(c0, n).setZero();
+        // Zeroed for accumulation, except the output's when the output layer reads dY.
+        for (std::size_t b = 0; b < m_batch_adjoint.size(); ++b) {
+            if (!(direct && int(b) == m_output)) m_batch_adjoint[b].middleCols(c0, n).setZero();
+        }
         if (direct)
             m_batch_adjoint[static_cast<std::size_t>(last.src)].middleCols(c0, n).noalias() +=
                 last.W.transpose() * dY.middleCols(c0, n);
@@ -670,7 +686,7 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
             auto a_dst = m_batch_adjoint[static_cast<std::size_t>(op.dst)].middleCols(c0, n);
             auto a_src = m_batch_adjoint[static_cast<std::size_t>(op.src)].middleCols(c0, n);
             if (op.act != ActivationKind::identity)
-                multiply_by_derivative(op.act, m_batch_pre[i].middleCols(c0, n).array(), a_dst.array());
+                a_dst.array() *= m_batch_derivative[i].middleCols(c0, n).array();
             switch (op.kind) {
             case Op::Kind::affine:
                 a_src.noalias() += op.W.transpose() * a_dst;

@@ -128,8 +128,9 @@ private:
     std::vector<Matrix> m_adjoint;             ///< per buffer: padded size × k (reverse) or size × in (forward)
     Matrix m_rows_weight;
 
-    // batched workspaces: per buffer (logical size × B) and per op with an activation
-    std::vector<Matrix> m_batch, m_batch_pre, m_batch_adjoint;
+    // batched workspaces: per buffer (logical size × B), and per op with an activation its
+    // derivative at the recorded forward's pre-activations (the tape)
+    std::vector<Matrix> m_batch, m_batch_derivative, m_batch_adjoint;
     Index m_batch_columns = -1;  ///< columns of the last recorded forward_batch (−1: none)
 };
 

@@ -117,6 +117,39 @@ void train_epoch(benchmark::State& state, const std::string& scene_name, bool fl
     state.counters["network_GFLOP"] = 2.0 * columns * 3.0 * (decoder_madds + integrator_madds) * 1e-9;
 }
 
+/// The frozen decoder's batched pass as the self-supervised loss runs it: forward with its
+/// tape, then the vector-Jacobian product, on 512 columns (a batch of 256 and its noisy
+/// copies), the columns split over the threads. Counter GFLOPS: 2 × the multiply-adds of
+/// both passes per second, to set beside gemm_rate.
+template <typename Scalar>
+void decoder_batch(benchmark::State& state, const std::string& scene_name)
+{
+    set_log_level(LogLevel::Quiet);
+    TrainingSetup* s = nullptr;
+    try {
+        s = &setup(scene_name);
+    } catch (const Error& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+    constexpr Index kColumns = 512;
+    nn::BasicInferenceNetwork<Scalar> decoder(s->autoencoder->decoder());
+    const Matrix Z = Matrix::Random(s->autoencoder->latent_dim(), kColumns);
+    Matrix Y, dY = Matrix::Random(decoder.out_features(), kColumns), dZ;
+    for (auto _ : state) {
+        decoder.forward_batch(Z, Y, true);
+        decoder.vjp_batch(dY, dZ);
+        benchmark::DoNotOptimize(dZ.data());
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(4.0 * double(decoder.multiply_adds() * kColumns) * 1e-9,
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+void decoder_batch_float(benchmark::State& state, const std::string& scene) { decoder_batch<float>(state, scene); }
+void decoder_batch_double(benchmark::State& state, const std::string& scene) { decoder_batch<double>(state, scene); }
+BENCHMARK_CAPTURE(decoder_batch_float, cloth, "cloth")->Name("decoder_batch/float/cloth")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(decoder_batch_double, cloth, "cloth")->Name("decoder_batch/double/cloth")->Unit(benchmark::kMillisecond);
+
 /// Eigen GEMM throughput on this machine at the paper's decoder width (200 × 200 weights
 /// times 1,024 columns, the columns split over the threads as the frozen decoder's batched
 /// pass splits them). Counter GFLOPS: 2 × multiply-adds per second.
