@@ -82,18 +82,24 @@ TrainingSetup& setup(const std::string& scene_name)
     return *slot;
 }
 
+/// setup(), or nullptr with the benchmark skipped and the reason given (e.g. missing meshes).
+TrainingSetup* setup_or_skip(benchmark::State& state, const std::string& scene_name)
+{
+    try {
+        return &setup(scene_name);
+    } catch (const Error& e) {
+        state.SkipWithError(e.what());
+        return nullptr;
+    }
+}
+
 /// @param float32  the frozen decoder in single precision (`float32_decoder`)
 void train_epoch(benchmark::State& state, const std::string& scene_name, bool float32)
 {
     set_log_level(LogLevel::Quiet);
     keep_freed_memory();  // the CLI's heap policy (core/allocator.hpp)
-    TrainingSetup* s = nullptr;
-    try {
-        s = &setup(scene_name);
-    } catch (const Error& e) {
-        state.SkipWithError(e.what());
-        return;
-    }
+    TrainingSetup* s = setup_or_skip(state, scene_name);
+    if (!s) return;
     IntegratorTrainOptions options;
     options.hidden = default_integrator_hidden(scene_name);
     options.batch_size = 256;
@@ -125,13 +131,9 @@ template <typename Scalar>
 void decoder_batch(benchmark::State& state, const std::string& scene_name)
 {
     set_log_level(LogLevel::Quiet);
-    TrainingSetup* s = nullptr;
-    try {
-        s = &setup(scene_name);
-    } catch (const Error& e) {
-        state.SkipWithError(e.what());
-        return;
-    }
+    keep_freed_memory();  // as train_epoch
+    TrainingSetup* s = setup_or_skip(state, scene_name);
+    if (!s) return;
     using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
     constexpr Index kColumns = 512;
     nn::BasicInferenceNetwork<Scalar> decoder(s->autoencoder->decoder());
@@ -147,8 +149,8 @@ void decoder_batch(benchmark::State& state, const std::string& scene_name)
 }
 void decoder_batch_float(benchmark::State& state, const std::string& scene) { decoder_batch<float>(state, scene); }
 void decoder_batch_double(benchmark::State& state, const std::string& scene) { decoder_batch<double>(state, scene); }
-BENCHMARK_CAPTURE(decoder_batch_float, cloth, "cloth")->Name("decoder_batch/float/cloth")->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(decoder_batch_double, cloth, "cloth")->Name("decoder_batch/double/cloth")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(decoder_batch_float, cloth, "cloth")->Name("decoder_batch/float/cloth")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(decoder_batch_double, cloth, "cloth")->Name("decoder_batch/double/cloth")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 /// Eigen GEMM throughput on this machine at the paper's decoder width (200 × 200 weights
 /// times 1,024 columns, the columns split over the threads as the frozen decoder's batched
