@@ -164,7 +164,7 @@ public:
 private:
     double evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient);
     /// Decoded x_{t−1} (X1) and x_{t−2} (X2) of the batch columns: the clean columns from
-    /// the cache, the noisy copies' latents of both steps in one decoder pass.
+    /// the cache, the noisy copies' latents decoded.
     void decoded_inputs(const IntegratorBatch& batch, MatrixXd& X1, MatrixXd& X2);
 
     const PhysicsModel& m_model;
