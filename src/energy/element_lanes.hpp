@@ -22,13 +22,14 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "energy/energy.hpp"
 
 namespace lb {
 
 template <int K, int P>
 class ElementLanes {
 public:
-    static constexpr int kLanes = 8;
+    static constexpr int kLanes = Energy::kColumnLanes;  // 8 doubles: one AVX-512 register
     using Params = std::array<double, P>;
 
     ElementLanes() = default;
@@ -38,6 +39,7 @@ public:
     template <typename ParamsOf>
     ElementLanes(Index n, const int* nodes, ParamsOf&& params_of)
     {
+        m_count = n;
         m_blocks.resize(std::size_t((n + kLanes - 1) / kLanes));
         for (std::size_t k = 0; k < m_blocks.size(); ++k) {
             Block& blk = m_blocks[k];
@@ -116,18 +118,90 @@ public:
         return sum;
     }
 
+    /// The same pass with the lanes over kLanes samples (columns) instead of over elements: X
+    /// and G hold 3N × kLanes numbers, row-major (coordinate r of sample l at r · kLanes + l),
+    /// so a lane's gather and scatter are unit-stride vector loads and stores. Adds weight ·
+    /// ∇E of sample l to its column of G and E of sample l to values[l]; serial, allocates
+    /// nothing. Element by element in the element pass's order, each lane computing, storing
+    /// and then adding what that pass does for its sample: the two passes give the same
+    /// numbers bit for bit (tests/energy/test_column_lanes.cpp checks every lane energy).
+    template <typename Kernel>
+    void add_value_gradient_columns(const double* X, double weight, double* G, double* values,
+                                    const Kernel& kernel) const
+    {
+        // Two elements per lane loop: one element's kernel is a chain of dependent divisions
+        // and square roots (the hinge's atan2), and two independent chains fill the pipeline.
+        // Their values and gradients are still added in element order.
+        Index e = 0;
+        for (; e + 1 < m_count; e += 2) column_pair<2>(e, X, weight, G, values, kernel);
+        if (e < m_count) column_pair<1>(e, X, weight, G, values, kernel);
+    }
+
 private:
     /// p[j] of one lane, read in place from the block's structure of arrays.
     struct LaneParams {
         const double* first;  ///< &params[0][lane]
         double operator[](int j) const { return first[j * kLanes]; }
     };
+
+    /// add_value_gradient_columns's step: elements e, …, e + M − 1 on every sample lane.
+    template <int M, typename Kernel>
+    void column_pair(Index e, const double* X, double weight, double* G, double* values, const Kernel& kernel) const
+    {
+        const double* xa[M][K];
+        double* ga[M][K];
+        const double* params[M];
+        // The element's lane scale (1: e is a real element), multiplied in as the element pass
+        // does: the compiler fuses v's product into the sum below (the element pass cannot,
+        // its sum being scalar), and a product with 1 is exact, so fused or not the sum is
+        // the same.
+        double s[M];
+        for (int m = 0; m < M; ++m) {
+            const Block& blk = m_blocks[std::size_t((e + m) / kLanes)];
+            const int slot = int((e + m) % kLanes);
+            for (int a = 0; a < K; ++a) {
+                xa[m][a] = X + 3 * kLanes * Index(blk.nodes[a][slot]);
+                ga[m][a] = G + 3 * kLanes * Index(blk.nodes[a][slot]);
+            }
+            params[m] = &blk.params[0][slot];
+            s[m] = blk.scale[slot];
+        }
+        alignas(64) double v[M][kLanes];
+        alignas(64) double out[M][K][3][kLanes];
+        // Element m of the step on lane l (m a constant where it is called: GCC does not
+        // unroll a loop over m inside the lane loop, and then refuses to vectorise it).
+        auto element = [&](int m, int l) {
+            double xe[K][3], ge[K][3];
+            for (int a = 0; a < K; ++a) {
+                for (int i = 0; i < 3; ++i) xe[a][i] = xa[m][a][i * kLanes + l];
+            }
+            v[m][l] = s[m] * kernel(xe, LaneParams{params[m]}, ge);  // the same element in every lane
+            for (int a = 0; a < K; ++a) {
+                for (int i = 0; i < 3; ++i) out[m][a][i][l] = s[m] * ge[a][i];
+            }
+        };
+#pragma omp simd
+        for (int l = 0; l < kLanes; ++l) {
+            element(0, l);
+            if constexpr (M == 2) element(1, l);
+        }
+        for (int m = 0; m < M; ++m) {
+            for (int l = 0; l < kLanes; ++l) values[l] += v[m][l];
+            for (int a = 0; a < K; ++a) {
+                for (int i = 0; i < 3; ++i) {
+                    double* gi = ga[m][a] + i * kLanes;
+                    for (int l = 0; l < kLanes; ++l) gi[l] += weight * out[m][a][i][l];
+                }
+            }
+        }
+    }
     struct alignas(64) Block {
         int nodes[K][kLanes];
         double params[P][kLanes];
         double scale[kLanes];  ///< 1, or 0 for padding
     };
     std::vector<Block> m_blocks;
+    Index m_count = 0;  ///< elements (the last block's padding excluded)
 };
 
 } // namespace lb

@@ -1,5 +1,6 @@
 #include "energy/energy.hpp"
 
+#include "core/error.hpp"
 #include "core/parallel.hpp"
 
 #include <omp.h>
@@ -73,6 +74,11 @@ double Energy::add_value_gradient(const VectorXd& x, double weight, VectorXd& g)
     }
     for (Index e = 0; e < n; ++e) scatter(e, local.data() + e * dofs);
     return sum;
+}
+
+void Energy::add_value_gradient_columns(const double*, double, double*, double*) const
+{
+    throw Error("Energy '" + name() + "' has no column pass (has_column_pass() is false)");
 }
 
 bool Energy::serial_value_gradient() const

@@ -56,6 +56,18 @@ public:
     /// scattering as it goes, and allocates nothing. An energy may override it with the
     /// same serial pass and its element kernel inlined (InlinedElementEnergy).
     virtual double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const;
+    /// Samples per column pass (add_value_gradient_columns): 8 doubles, one AVX-512 register.
+    static constexpr int kColumnLanes = 8;
+    /// True if the energy has add_value_gradient_columns (the element-lane energies: rods,
+    /// shells, tets).
+    virtual bool has_column_pass() const { return false; }
+    /// add_value_gradient's serial pass for kColumnLanes samples at once, the SIMD lanes over
+    /// the samples instead of over the elements (energy/element_lanes.hpp): X and G hold
+    /// 3N × kColumnLanes numbers, row-major (coordinate r of sample l at r · kColumnLanes + l).
+    /// Adds weight · ∇E of sample l to its column of G and E of sample l to values[l]: the same
+    /// numbers as add_value_gradient on that sample, bit for bit. Throws Error if
+    /// !has_column_pass().
+    virtual void add_value_gradient_columns(const double* X, double weight, double* G, double* values) const;
     /// True where add_value_gradient runs its serial pass: inside a parallel region (even a
     /// one-thread one), with one thread available, or below kParallelElementThreshold elements.
     bool serial_value_gradient() const;

@@ -77,6 +77,11 @@ double RodBending::add_value_gradient(const VectorXd& x, double weight, VectorXd
     return m_lanes.add_value_gradient(x, weight, g, kBendingKernel);
 }
 
+void RodBending::add_value_gradient_columns(const double* X, double weight, double* G, double* values) const
+{
+    m_lanes.add_value_gradient_columns(X, weight, G, values, kBendingKernel);
+}
+
 double RodBending::local_value(Index i, const ElementVector& xe) const
 {
     const Vector3d kb =

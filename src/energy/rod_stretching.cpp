@@ -53,6 +53,11 @@ double RodStretching::add_value_gradient(const VectorXd& x, double weight, Vecto
     return m_lanes.add_value_gradient(x, weight, g, kStretchingKernel);
 }
 
+void RodStretching::add_value_gradient_columns(const double* X, double weight, double* G, double* values) const
+{
+    m_lanes.add_value_gradient_columns(X, weight, G, values, kStretchingKernel);
+}
+
 double RodStretching::local_value(Index e, const ElementVector& xe) const
 {
     const double rest = m_rest_lengths[size_t(e)];

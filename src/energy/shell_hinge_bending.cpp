@@ -66,6 +66,11 @@ double ShellHingeBending::add_value_gradient(const VectorXd& x, double weight, V
     return m_lanes.add_value_gradient(x, weight, g, kHingeKernel);
 }
 
+void ShellHingeBending::add_value_gradient_columns(const double* X, double weight, double* G, double* values) const
+{
+    m_lanes.add_value_gradient_columns(X, weight, G, values, kHingeKernel);
+}
+
 double ShellHingeBending::local_value(Index h, const ElementVector& xe) const
 {
     const double delta = wrap_angle(dihedral_angle(xe) - m_rest_angles[size_t(h)]);

@@ -32,6 +32,8 @@ public:
     /// The serial pass (inside the training losses' batch loop) vectorised across hinges
     /// (energy/element_lanes.hpp, θ by lane_atan2); the parallel pass is Energy's.
     double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
+    bool has_column_pass() const override { return true; }
+    void add_value_gradient_columns(const double* X, double weight, double* G, double* values) const override;
 
     /// k_b = E t³ / (24 (1−ν²)) (N·m).
     double bending_stiffness() const { return m_bending_stiffness; }

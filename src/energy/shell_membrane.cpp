@@ -83,4 +83,9 @@ double ShellMembrane::add_value_gradient(const VectorXd& x, double weight, Vecto
     return m_lanes.add_value_gradient(x, weight, g);
 }
 
+void ShellMembrane::add_value_gradient_columns(const double* X, double weight, double* G, double* values) const
+{
+    m_lanes.add_value_gradient_columns(X, weight, G, values);
+}
+
 } // namespace lb

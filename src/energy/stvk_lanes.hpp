@@ -34,6 +34,12 @@ public:
         return m_lanes.add_value_gradient(x, weight, g, kernel(m_lame));
     }
 
+    /// The same pass over Energy::kColumnLanes samples (Energy::add_value_gradient_columns).
+    void add_value_gradient_columns(const double* X, double weight, double* G, double* values) const
+    {
+        m_lanes.add_value_gradient_columns(X, weight, G, values, kernel(m_lame));
+    }
+
     /// One element (gathered xe, gradient g): local_value_gradient.
     static double evaluate(const ElementVector& xe, const ShapeGradients& B, double measure, const LameParameters& lame,
                            ElementVector& g)

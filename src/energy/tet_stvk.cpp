@@ -80,4 +80,9 @@ double TetStVK::add_value_gradient(const VectorXd& x, double weight, VectorXd& g
     return m_lanes.add_value_gradient(x, weight, g);
 }
 
+void TetStVK::add_value_gradient_columns(const double* X, double weight, double* G, double* values) const
+{
+    m_lanes.add_value_gradient_columns(X, weight, G, values);
+}
+
 } // namespace lb

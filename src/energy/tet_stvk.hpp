@@ -39,6 +39,8 @@ public:
     /// The serial pass (inside the training losses' batch loop) vectorised across elements
     /// (energy/stvk_lanes.hpp); the parallel pass is Energy's.
     double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
+    bool has_column_pass() const override { return true; }
+    void add_value_gradient_columns(const double* X, double weight, double* G, double* values) const override;
 
     const LameParameters& lame() const { return m_lame; }
     /// Rest volume V_t (m³).

@@ -21,6 +21,7 @@ LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoenc
     for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
     m_gradients.resize(size_t(threads));
     m_positions.resize(size_t(threads));
+    m_columns.resize(size_t(threads));
 }
 
 double LatentPotential::value(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
@@ -102,8 +103,21 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
     VectorXd weights = options.weights;
     if (weights.size() == 0) weights.setOnes(B);
     const VectorXd gradient_scale = weights / options.normalization;
+    // With gradients, whole groups of kColumnLanes columns take the column pass (the elastic
+    // terms vectorised over the samples); the rest one column at a time. Same numbers.
+    constexpr Index W = Energy::kColumnLanes;
+    const bool column_pass = gradient && std::any_of(m_potentials[0].terms().terms().begin(),
+                                                     m_potentials[0].terms().terms().end(),
+                                                     [](const WeightedEnergy& t) { return t.energy->has_column_pass(); });
+    const Index groups = column_pass ? B / W : 0;
+    const Index single = groups * W;  // the first column done alone
 #pragma omp parallel for schedule(dynamic, 1)
-    for (Index i = 0; i < B; ++i) {
+    for (Index job = 0; job < groups + (B - single); ++job) {
+        if (job < groups) {
+            energies_of_columns(job * W, X, bc_targets, X_prev, X_prev2, gradient_scale, out);
+            continue;
+        }
+        const Index i = single + (job - groups);
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
         VectorXd& xt = m_positions[size_t(omp_get_thread_num())];  // reused: no allocation per sample
         xt = X.col(i);
@@ -120,6 +134,68 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
     if (check_finite && !energies.allFinite())
         throw NumericalError("non-finite incremental potential in the training batch");
     out.objective = weights.dot(energies) / options.normalization;
+}
+
+void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X,
+                                          const Eigen::Ref<const MatrixXd>& bc_targets,
+                                          const Eigen::Ref<const MatrixXd>& X_prev,
+                                          const Eigen::Ref<const MatrixXd>& X_prev2, const VectorXd& gradient_scale,
+                                          LatentEnergies& out)
+{
+    constexpr int W = Energy::kColumnLanes;
+    const int thread = omp_get_thread_num();
+    IncrementalPotential& pot = m_potentials[size_t(thread)];
+    ColumnWorkspace& ws = m_columns[size_t(thread)];
+    VectorXd& x = m_positions[size_t(thread)];
+    const Index n = X.rows();
+    ws.X.resize(n * W);  // allocates once: the sizes do not change between batches
+    ws.G.resize(n * W);
+    ws.g.resize(W);
+    for (int l = 0; l < W; ++l) ws.g[size_t(l)].setZero(n);
+    // Transposes row by row: each row of the 3N × W block is one cache line.
+    auto to_rows = [n](const auto& column, double* rows) {
+        for (Index r = 0; r < n; ++r) {
+            for (int l = 0; l < W; ++l) rows[r * W + l] = column(l)[r];
+        }
+    };
+    auto to_columns = [n](const double* rows, std::vector<VectorXd>& columns) {
+        for (Index r = 0; r < n; ++r) {
+            for (int l = 0; l < W; ++l) columns[size_t(l)][r] = rows[r * W + l];
+        }
+    };
+    to_rows([&](int l) { return X.col(c0 + l).data(); }, ws.X.data());
+    double sums[W] = {};
+    const std::vector<WeightedEnergy>& terms = pot.terms().terms();
+    for (size_t k = 0; k < terms.size();) {
+        size_t end = k;
+        if (terms[k].energy->has_column_pass()) {
+            // A run of column-pass terms on the transposed gradients.
+            to_rows([&](int l) { return ws.g[size_t(l)].data(); }, ws.G.data());
+            for (; end < terms.size() && terms[end].energy->has_column_pass(); ++end) {
+                double values[W] = {};
+                terms[end].energy->add_value_gradient_columns(ws.X.data(), terms[end].weight, ws.G.data(), values);
+                for (int l = 0; l < W; ++l) sums[l] += terms[end].weight * values[l];
+            }
+            to_columns(ws.G.data(), ws.g);
+        } else {
+            // A run of the others (inertia, gravity, penalty), column by column with its x̃
+            // and Dirichlet targets.
+            while (end < terms.size() && !terms[end].energy->has_column_pass()) ++end;
+            for (int l = 0; l < W; ++l) {
+                const Index i = c0 + l;
+                x = X.col(i);
+                pot.set_previous(X_prev.col(i), X_prev2.col(i));
+                pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
+                for (size_t j = k; j < end; ++j)
+                    sums[l] += terms[j].weight * terms[j].energy->add_value_gradient(x, terms[j].weight, ws.g[size_t(l)]);
+            }
+        }
+        k = end;
+    }
+    for (int l = 0; l < W; ++l) {
+        out.energies[c0 + l] = sums[l];
+        out.grad_x.col(c0 + l) = ws.g[size_t(l)] * gradient_scale[c0 + l];
+    }
 }
 
 LatentEnergies LatentPotential::evaluate_positions(const Eigen::Ref<const MatrixXd>& X,

@@ -119,6 +119,13 @@ private:
     void energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
                      const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
                      const LatentEnergyOptions& options, bool check_finite, LatentEnergies& out);
+    /// energies_of's gradient pass for the Energy::kColumnLanes columns from c0 on: the terms
+    /// with a column pass (the elastic ones) run on all of them at once, the others column
+    /// by column; the same numbers as one IncrementalPotential::value_gradient per column, bit
+    /// for bit (terms in the same order, each column's sums in the same order).
+    void energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
+                             const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                             const VectorXd& gradient_scale, LatentEnergies& out);
     /// evaluate(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
     LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
                                     const Eigen::Ref<const MatrixXd>& X_prev,
@@ -142,6 +149,13 @@ private:
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
     std::vector<VectorXd> m_gradients;               ///< one x-gradient workspace per thread
     std::vector<VectorXd> m_positions;               ///< one decoded-state workspace per thread
+    /// Per thread, energies_of_columns's workspace: the columns' positions and gradients
+    /// transposed (3N × kColumnLanes, row-major) and each column's gradient.
+    struct ColumnWorkspace {
+        VectorXd X, G;
+        std::vector<VectorXd> g;
+    };
+    std::vector<ColumnWorkspace> m_columns;
     std::unique_ptr<nn::InferenceNetworkD> m_frozen;       ///< freeze_decoder()'s compiled decoder
     std::unique_ptr<nn::InferenceNetwork> m_frozen_float;  ///< or its single-precision copy
     MatrixXd m_features;                                   ///< its output workspace

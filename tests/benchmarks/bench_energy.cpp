@@ -192,3 +192,48 @@ void BM_ValueGradient_TetStVK(benchmark::State& state)
 BENCHMARK(BM_ValueGradient_TetStVK)->Name("value_gradient/tet_stvk")->Unit(benchmark::kMicrosecond);
 
 } // namespace
+
+namespace {
+
+// add_value_gradient_columns as the trainer calls it: Energy::kColumnLanes samples at once
+// (here the same state in every lane; the arithmetic does not depend on it). The counter
+// time/sample (seconds) sets it beside value_gradient/<energy>, whose time is one sample's.
+void run_value_gradient_columns(benchmark::State& state, const Mesh& mesh, const Energy& energy, double amplitude)
+{
+    constexpr int W = Energy::kColumnLanes;
+    const VectorXd x = deformed_state(mesh, amplitude);
+    VectorXd X(x.size() * W), G = VectorXd::Zero(x.size() * W);
+    for (Index r = 0; r < x.size(); ++r) X.segment<W>(r * W).setConstant(x[r]);
+    for (auto _ : state) {
+        double values[W] = {};
+        energy.add_value_gradient_columns(X.data(), 1.0, G.data(), values);
+        benchmark::DoNotOptimize(values);
+        benchmark::DoNotOptimize(G.data());
+        benchmark::ClobberMemory();
+    }
+    state.counters["elements"] = double(energy.num_elements());
+    state.counters["time/sample"] =
+        benchmark::Counter(W, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+void BM_ValueGradientColumns_ShellHinge(benchmark::State& state)
+{
+    run_value_gradient_columns(state, cloth_grid(), *cloth_hinges(), 0.01);
+}
+BENCHMARK(BM_ValueGradientColumns_ShellHinge)->Name("value_gradient_columns/shell_hinge")->Unit(benchmark::kMicrosecond);
+
+void BM_ValueGradientColumns_ShellMembrane(benchmark::State& state)
+{
+    run_value_gradient_columns(state, cloth_grid(), *cloth_membrane(), 0.01);
+}
+BENCHMARK(BM_ValueGradientColumns_ShellMembrane)
+    ->Name("value_gradient_columns/shell_membrane")
+    ->Unit(benchmark::kMicrosecond);
+
+void BM_ValueGradientColumns_TetStVK(benchmark::State& state)
+{
+    run_value_gradient_columns(state, armadillo_sized_beam(), *beam_stvk(), 0.005);
+}
+BENCHMARK(BM_ValueGradientColumns_TetStVK)->Name("value_gradient_columns/tet_stvk")->Unit(benchmark::kMicrosecond);
+
+} // namespace

@@ -202,6 +202,34 @@ TEST_P(LatentPotentialPhysics, BatchAgreesWithSingleSamplesAndTheDirectComputati
     }
 }
 
+// Whole groups of Energy::kColumnLanes columns take the column pass (the elastic terms
+// vectorised over the samples), the rest go one at a time: the same energies and weighted
+// x-gradients bit for bit as each column on its own.
+TEST_P(LatentPotentialPhysics, ColumnPassEqualsOneColumnAtATimeBitForBit)
+{
+    const Index B = 2 * Energy::kColumnLanes + 3;
+    Problem p(GetParam().physics(), B, 5);
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    const MatrixXd X = p.ae->decode(p.Z, p.T);
+    LatentEnergyOptions options;
+    options.gradient = true;
+    Rng rng(9);
+    options.weights = rng.uniform_vector(B, 0.5, 2.0);
+    options.normalization = 3.0;
+    const LatentEnergies batch = potential.evaluate_positions(X, p.T, p.X_prev, p.X_prev2, options);
+    for (Index i = 0; i < B; ++i) {
+        LatentEnergyOptions one;
+        one.gradient = true;
+        one.weights = VectorXd::Constant(1, options.weights[i]);
+        one.normalization = options.normalization;
+        const LatentEnergies single =
+            potential.evaluate_positions(X.col(i), p.T.col(i), p.X_prev.col(i), p.X_prev2.col(i), one);
+        EXPECT_EQ(batch.energies[i], single.energies[0]) << "sample " << i;
+        EXPECT_TRUE(batch.grad_x.col(i) == single.grad_x.col(0)) << "sample " << i;
+    }
+    EXPECT_GT(batch.grad_x.norm(), 0.0);
+}
+
 // The frozen decoder (the integrator trainers' path): the compiled double copy equals the
 // live decoder to round-off; the float32 copy (issue 14) to single-precision round-off, and
 // it really is single precision (not bit-identical to double).
