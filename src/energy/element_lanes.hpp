@@ -133,8 +133,8 @@ public:
         // and square roots (the hinge's atan2), and two independent chains fill the pipeline.
         // Their values and gradients are still added in element order.
         Index e = 0;
-        for (; e + 1 < m_count; e += 2) column_pair<2>(e, X, weight, G, values, kernel);
-        if (e < m_count) column_pair<1>(e, X, weight, G, values, kernel);
+        for (; e + 1 < m_count; e += 2) column_step<2>(e, X, weight, G, values, kernel);
+        if (e < m_count) column_step<1>(e, X, weight, G, values, kernel);
     }
 
 private:
@@ -146,7 +146,7 @@ private:
 
     /// add_value_gradient_columns's step: elements e, …, e + M − 1 on every sample lane.
     template <int M, typename Kernel>
-    void column_pair(Index e, const double* X, double weight, double* G, double* values, const Kernel& kernel) const
+    void column_step(Index e, const double* X, double weight, double* G, double* values, const Kernel& kernel) const
     {
         const double* xa[M][K];
         double* ga[M][K];
