@@ -130,8 +130,9 @@ public:
                                     const Kernel& kernel) const
     {
         // Two elements per lane loop: one element's kernel is a chain of dependent divisions
-        // and square roots (the hinge's atan2), and two independent chains fill the pipeline.
-        // Their values and gradients are still added in element order.
+        // and square roots (the hinge's atan2), and two independent chains can overlap. (The
+        // gain was not separable from the machine's noise: hinge 5.1 against 5.4 µs per
+        // sample, one run each.) Their values and gradients are still added in element order.
         Index e = 0;
         for (; e + 1 < m_count; e += 2) column_step<2>(e, X, weight, G, values, kernel);
         if (e < m_count) column_step<1>(e, X, weight, G, values, kernel);
