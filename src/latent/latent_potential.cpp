@@ -19,6 +19,8 @@ LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoenc
     const int threads = std::max(1, omp_get_max_threads());
     m_potentials.reserve(size_t(threads));
     for (int i = 0; i < threads; ++i) m_potentials.emplace_back(model, m_penalty_weight);
+    m_lane_potentials.reserve(size_t(threads) * Energy::kColumnLanes);
+    for (int i = 0; i < threads * Energy::kColumnLanes; ++i) m_lane_potentials.emplace_back(model, m_penalty_weight);
     m_gradients.resize(size_t(threads));
     m_positions.resize(size_t(threads));
     m_columns.resize(size_t(threads));
@@ -121,8 +123,7 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
         VectorXd& xt = m_positions[size_t(omp_get_thread_num())];  // reused: no allocation per sample
         xt = X.col(i);
-        pot.set_previous(X_prev.col(i), X_prev2.col(i));
-        pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
+        set_column_state(pot, i, bc_targets, X_prev, X_prev2);
         if (gradient) {
             VectorXd& g = m_gradients[size_t(omp_get_thread_num())];  // reused: no allocation per sample
             energies[i] = pot.value_gradient(xt, g);
@@ -144,7 +145,8 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
 {
     constexpr int W = Energy::kColumnLanes;
     const int thread = omp_get_thread_num();
-    IncrementalPotential& pot = m_potentials[size_t(thread)];
+    IncrementalPotential* pots = &m_lane_potentials[size_t(thread) * W];
+    for (int l = 0; l < W; ++l) set_column_state(pots[l], c0 + l, bc_targets, X_prev, X_prev2);
     ColumnWorkspace& ws = m_columns[size_t(thread)];
     VectorXd& x = m_positions[size_t(thread)];
     const Index n = X.rows();
@@ -165,7 +167,9 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
     };
     to_rows([&](int l) { return X.col(c0 + l).data(); }, ws.X.data());
     double sums[W] = {};
-    const std::vector<WeightedEnergy>& terms = pot.terms().terms();
+    // The terms in their order; the column-pass ones (elastic) are shared by every lane's
+    // potential, the others (inertia, penalty) are the lane's own.
+    const std::vector<WeightedEnergy>& terms = pots[0].terms().terms();
     for (size_t k = 0; k < terms.size();) {
         size_t end = k;
         if (terms[k].energy->has_column_pass()) {
@@ -178,16 +182,14 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
             }
             to_columns(ws.G.data(), ws.g);
         } else {
-            // A run of the others (inertia, gravity, penalty), column by column with its x̃
-            // and Dirichlet targets.
+            // A run of the others (inertia, gravity, penalty), column by column, each with its
+            // lane's potential.
             while (end < terms.size() && !terms[end].energy->has_column_pass()) ++end;
             for (int l = 0; l < W; ++l) {
-                const Index i = c0 + l;
-                x = X.col(i);
-                pot.set_previous(X_prev.col(i), X_prev2.col(i));
-                pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
+                x = X.col(c0 + l);
+                const std::vector<WeightedEnergy>& own = pots[l].terms().terms();
                 for (size_t j = k; j < end; ++j)
-                    sums[l] += terms[j].weight * terms[j].energy->add_value_gradient(x, terms[j].weight, ws.g[size_t(l)]);
+                    sums[l] += own[j].weight * own[j].energy->add_value_gradient(x, own[j].weight, ws.g[size_t(l)]);
             }
         }
         k = end;
@@ -196,6 +198,14 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
         out.energies[c0 + l] = sums[l];
         out.grad_x.col(c0 + l) = ws.g[size_t(l)] * gradient_scale[c0 + l];
     }
+}
+
+void LatentPotential::set_column_state(IncrementalPotential& pot, Index i, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                       const Eigen::Ref<const MatrixXd>& X_prev,
+                                       const Eigen::Ref<const MatrixXd>& X_prev2)
+{
+    pot.set_previous(X_prev.col(i), X_prev2.col(i));
+    pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
 }
 
 LatentEnergies LatentPotential::evaluate_positions(const Eigen::Ref<const MatrixXd>& X,

@@ -126,6 +126,9 @@ private:
     void energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
                              const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
                              const VectorXd& gradient_scale, LatentEnergies& out);
+    /// Give `pot` column i's x_{t−1}, x_{t−2} (so x̃) and Dirichlet targets.
+    static void set_column_state(IncrementalPotential& pot, Index i, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                 const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2);
     /// evaluate(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
     LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
                                     const Eigen::Ref<const MatrixXd>& X_prev,
@@ -147,6 +150,9 @@ private:
     double m_penalty_weight = 0.0;
     bool m_overwrite_dirichlet = false;
     std::vector<IncrementalPotential> m_potentials;  ///< one per thread
+    /// Per thread, one per lane of energies_of_columns (kColumnLanes each, thread-major): each
+    /// holds its column's x̃ and Dirichlet targets for the whole pass.
+    std::vector<IncrementalPotential> m_lane_potentials;
     std::vector<VectorXd> m_gradients;               ///< one x-gradient workspace per thread
     std::vector<VectorXd> m_positions;               ///< one decoded-state workspace per thread
     /// Per thread, energies_of_columns's workspace: the columns' positions and gradients
