@@ -29,7 +29,7 @@ void InertiaEnergy::require_size(const char* caller, Index size) const
     throw Error(msg.str());
 }
 
-void InertiaEnergy::set_x_tilde(const VectorXd& x_tilde)
+void InertiaEnergy::set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde)
 {
     require_size("set_x_tilde", x_tilde.size());
     m_x_tilde = x_tilde;

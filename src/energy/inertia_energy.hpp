@@ -22,7 +22,7 @@ public:
     double add_value_gradient(const VectorXd& x, double weight, VectorXd& g) const override;
 
     /// @param x_tilde  3N inertial target 2 x_{t−1} − x_{t−2}, xyz interleaved
-    void set_x_tilde(const VectorXd& x_tilde);
+    void set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde);
     /// x̃ = 2 x_prev − x_prev2, formed in place (no temporary; both 3N).
     void set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2);
     const VectorXd& x_tilde() const { return m_x_tilde; }

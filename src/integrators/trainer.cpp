@@ -225,44 +225,47 @@ double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch&
 
     // Self-supervised: the incremental potential of the decoded prediction, each sample
     // weighted by data balancing, averaged over the batch.
-    MatrixXd X1, X2;
-    decoded_inputs(batch, X1, X2);
+    MatrixXd X_tilde;
+    VectorXd speeds;
+    step_inputs(batch, X_tilde, speeds);
     LatentEnergyOptions options;
     options.gradient = with_gradient;
-    options.weights = m_options.data_balancing ? balancing_weights(X1, X2) : VectorXd::Ones(B);
+    options.weights = m_options.data_balancing ? weights_of(speeds) : VectorXd::Ones(B);
     options.normalization = double(B);
-    const LatentEnergies e = m_potential.evaluate(Zt, batch.targets, X1, X2, options);
+    const LatentEnergies e = m_potential.evaluate_tilde(Zt, batch.targets, X_tilde, options);
     if (with_gradient) model.backward(e.grad_z);
     return e.objective;
 }
 
 void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
 {
-    m_decoded_prev = m_potential.decode(samples.z_prev, samples.targets_prev);
-    m_decoded_prev2 = m_potential.decode(samples.z_prev2, samples.targets_prev2);
+    const MatrixXd X1 = m_potential.decode(samples.z_prev, samples.targets_prev);
+    const MatrixXd X2 = m_potential.decode(samples.z_prev2, samples.targets_prev2);
+    m_cached_tilde = LatentPotential::x_tilde(X1, X2);
+    m_cached_speeds = balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity);
 }
 
-void IntegratorTrainer::decoded_inputs(const IntegratorBatch& batch, MatrixXd& X1, MatrixXd& X2)
+void IntegratorTrainer::step_inputs(const IntegratorBatch& batch, MatrixXd& X_tilde, VectorXd& speeds)
 {
     const Index B = batch.size();
-    if (m_decoded_prev.size() == 0 || batch.source.size() != size_t(B)) {
-        X1 = m_potential.decode(batch.z_prev, batch.targets_prev);
-        X2 = m_potential.decode(batch.z_prev2, batch.targets_prev2);
-        return;
+    const bool from_cache = m_cached_tilde.size() != 0 && batch.source.size() == size_t(B);
+    const Index clean = from_cache ? batch.clean : 0;
+    X_tilde.resize(m_model.num_dofs(), B);
+    speeds.resize(m_options.data_balancing ? B : 0);
+#pragma omp parallel for schedule(static) if (clean >= kParallelColumns)
+    for (Index i = 0; i < clean; ++i) {
+        X_tilde.col(i) = m_cached_tilde.col(batch.source[size_t(i)]);
+        if (speeds.size() != 0) speeds[i] = m_cached_speeds[batch.source[size_t(i)]];
     }
-    X1.resize(m_decoded_prev.rows(), B);
-    X2.resize(m_decoded_prev2.rows(), B);
-#pragma omp parallel for schedule(static) if (batch.clean >= kParallelColumns)
-    for (Index i = 0; i < batch.clean; ++i) {
-        X1.col(i) = m_decoded_prev.col(batch.source[size_t(i)]);
-        X2.col(i) = m_decoded_prev2.col(batch.source[size_t(i)]);
-    }
-    const Index noisy = B - batch.clean;
-    if (noisy == 0) return;
+    const Index decoded = B - clean;
+    if (decoded == 0) return;
     // One decoder pass per step, not one over both: the GEMMs' column blocks (and with them
     // the round-off of the columns at a block's edge) stay those the published fits had.
-    X1.rightCols(noisy) = m_potential.decode(batch.z_prev.rightCols(noisy), batch.targets_prev.rightCols(noisy));
-    X2.rightCols(noisy) = m_potential.decode(batch.z_prev2.rightCols(noisy), batch.targets_prev2.rightCols(noisy));
+    const MatrixXd X1 = m_potential.decode(batch.z_prev.rightCols(decoded), batch.targets_prev.rightCols(decoded));
+    const MatrixXd X2 = m_potential.decode(batch.z_prev2.rightCols(decoded), batch.targets_prev2.rightCols(decoded));
+    X_tilde.rightCols(decoded) = LatentPotential::x_tilde(X1, X2);
+    if (speeds.size() != 0)
+        speeds.tail(decoded) = balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity);
 }
 
 double IntegratorTrainer::loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch)
@@ -277,14 +280,18 @@ double IntegratorTrainer::loss(LatentMlpModel& model, const IntegratorBatch& bat
 
 double IntegratorTrainer::mean_input_speed(const TrainingSamples& samples)
 {
-    if (m_decoded_prev.cols() != samples.size()) cache_decoded_inputs(samples);
-    return balancing_speeds(m_decoded_prev, m_decoded_prev2, m_model.dt(), m_options.balancing_velocity).mean();
+    if (m_cached_speeds.size() != samples.size()) cache_decoded_inputs(samples);
+    return m_cached_speeds.mean();
 }
 
 VectorXd IntegratorTrainer::balancing_weights(const Eigen::Ref<const MatrixXd>& X_prev,
                                              const Eigen::Ref<const MatrixXd>& X_prev2) const
 {
-    const VectorXd speeds = balancing_speeds(X_prev, X_prev2, m_model.dt(), m_options.balancing_velocity);
+    return weights_of(balancing_speeds(X_prev, X_prev2, m_model.dt(), m_options.balancing_velocity));
+}
+
+VectorXd IntegratorTrainer::weights_of(const VectorXd& speeds) const
+{
     return speeds.unaryExpr([&](double v) { return 1.0 / std::max(v, m_velocity_floor); });
 }
 

@@ -158,21 +158,25 @@ public:
     std::string resolved_options(Index num_samples) const;
 
     /// Decode the samples' ground-truth input latents once (x_{t−1}, x_{t−2} of the clean
-    /// columns of every batch): the decoder is frozen, so they never change.
+    /// columns of every batch; the decoder is frozen, so they never change) and keep what
+    /// the loss reads of them: x̃ = 2 x_{t−1} − x_{t−2} and |v_{t−1}|.
     void cache_decoded_inputs(const TrainingSamples& samples);
 
 private:
     double evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient);
-    /// Decoded x_{t−1} (X1) and x_{t−2} (X2) of the batch columns: the clean columns from
-    /// the cache, the noisy copies' latents decoded.
-    void decoded_inputs(const IntegratorBatch& batch, MatrixXd& X1, MatrixXd& X2);
+    /// The batch columns' x̃ (3N × B) and, with data balancing, |v_{t−1}| (B): the clean
+    /// columns from the cache, the noisy copies' input latents decoded.
+    void step_inputs(const IntegratorBatch& batch, MatrixXd& X_tilde, VectorXd& speeds);
+    /// 1 / max(|v_{t−1}|, v_floor) of every speed.
+    VectorXd weights_of(const VectorXd& speeds) const;
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
     IntegratorTrainOptions m_options;
     LatentPotential m_potential;  ///< E(D(z)) with the applied w_bc (0 for rods: hard roots)
     double m_velocity_floor = 1e-6;
-    MatrixXd m_decoded_prev, m_decoded_prev2;  ///< 3N × S cache (empty: decode every batch)
+    MatrixXd m_cached_tilde;   ///< x̃ of every sample, 3N × S (empty: decode every batch)
+    VectorXd m_cached_speeds;  ///< |v_{t−1}| of every sample (S)
 };
 
 } // namespace lb

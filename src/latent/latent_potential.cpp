@@ -29,7 +29,7 @@ LatentPotential::LatentPotential(const PhysicsModel& model, Autoencoder& autoenc
 double LatentPotential::value(const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& bc_targets,
                               const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2)
 {
-    return evaluate_columns(z, bc_targets, x_prev, x_prev2, {}, false).energies[0];
+    return evaluate_columns(z, bc_targets, checked_x_tilde("value", 1, x_prev, x_prev2), {}, false).energies[0];
 }
 
 double LatentPotential::value_and_gradient(const Eigen::Ref<const VectorXd>& z,
@@ -39,7 +39,8 @@ double LatentPotential::value_and_gradient(const Eigen::Ref<const VectorXd>& z,
 {
     LatentEnergyOptions options;
     options.gradient = true;
-    LatentEnergies r = evaluate_columns(z, bc_targets, x_prev, x_prev2, options, false);
+    LatentEnergies r =
+        evaluate_columns(z, bc_targets, checked_x_tilde("value_and_gradient", 1, x_prev, x_prev2), options, false);
     grad_z = r.grad_z.col(0);
     return r.energies[0];
 }
@@ -48,27 +49,49 @@ LatentEnergies LatentPotential::evaluate(const Eigen::Ref<const MatrixXd>& Z, co
                                          const Eigen::Ref<const MatrixXd>& X_prev,
                                          const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options)
 {
-    return evaluate_columns(Z, bc_targets, X_prev, X_prev2, options, true);
+    return evaluate_columns(Z, bc_targets, checked_x_tilde("evaluate", Z.cols(), X_prev, X_prev2), options, true);
+}
+
+LatentEnergies LatentPotential::evaluate_tilde(const Eigen::Ref<const MatrixXd>& Z,
+                                               const Eigen::Ref<const MatrixXd>& bc_targets,
+                                               const Eigen::Ref<const MatrixXd>& X_tilde,
+                                               const LatentEnergyOptions& options)
+{
+    return evaluate_columns(Z, bc_targets, X_tilde, options, true);
+}
+
+MatrixXd LatentPotential::x_tilde(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2)
+{
+    return 2.0 * X_prev - X_prev2;
+}
+
+namespace {
+std::string shape(const Eigen::Ref<const MatrixXd>& m) { return std::to_string(m.rows()) + "×" + std::to_string(m.cols()); }
+} // namespace
+
+MatrixXd LatentPotential::checked_x_tilde(const char* caller, Index B, const Eigen::Ref<const MatrixXd>& X_prev,
+                                          const Eigen::Ref<const MatrixXd>& X_prev2) const
+{
+    const Index n_dofs = m_model.num_dofs();
+    if (X_prev.rows() != n_dofs || X_prev.cols() != B || X_prev2.rows() != n_dofs || X_prev2.cols() != B)
+        throw Error(std::string("LatentPotential::") + caller + ": x_prev " + shape(X_prev) + ", x_prev2 " +
+                    shape(X_prev2) + "; expected " + std::to_string(n_dofs) + " × " + std::to_string(B) + " each");
+    return x_tilde(X_prev, X_prev2);
 }
 
 LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
-                                                 const Eigen::Ref<const MatrixXd>& X_prev,
-                                                 const Eigen::Ref<const MatrixXd>& X_prev2,
+                                                 const Eigen::Ref<const MatrixXd>& X_tilde,
                                                  const LatentEnergyOptions& options, bool check_finite)
 {
     const Index B = Z.cols();
     const Index n_dofs = m_model.num_dofs();
     const Index n_targets = 3 * Index(m_model.bc_indices().size());
-    auto shape = [](const auto& m) { return std::to_string(m.rows()) + "×" + std::to_string(m.cols()); };
     if (Z.rows() != m_autoencoder.latent_dim() || bc_targets.rows() != n_targets || bc_targets.cols() != B ||
-        X_prev.rows() != n_dofs || X_prev.cols() != B || X_prev2.rows() != n_dofs || X_prev2.cols() != B ||
-        (options.weights.size() != 0 && options.weights.size() != B))
-        throw Error("LatentPotential: shapes z " + shape(Z) + ", bc_targets " + shape(bc_targets) + ", x_prev " +
-                    shape(X_prev) + ", x_prev2 " + shape(X_prev2) + ", weights " +
-                    std::to_string(options.weights.size()) + "; expected " +
-                    std::to_string(m_autoencoder.latent_dim()) + ", " + std::to_string(n_targets) + ", " +
-                    std::to_string(n_dofs) + " and " + std::to_string(n_dofs) + " rows, as many columns, 0 or " +
-                    std::to_string(B) + " weights");
+        X_tilde.rows() != n_dofs || X_tilde.cols() != B || (options.weights.size() != 0 && options.weights.size() != B))
+        throw Error("LatentPotential: shapes z " + shape(Z) + ", bc_targets " + shape(bc_targets) + ", x_tilde " +
+                    shape(X_tilde) + ", weights " + std::to_string(options.weights.size()) + "; expected " +
+                    std::to_string(m_autoencoder.latent_dim()) + ", " + std::to_string(n_targets) + " and " +
+                    std::to_string(n_dofs) + " rows, as many columns, 0 or " + std::to_string(B) + " weights");
     LatentEnergies out;
     MatrixXd X;
     if (decoder_frozen()) {
@@ -76,7 +99,7 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
     } else {
         X = positions_of(m_autoencoder.decode_features(Z), bc_targets);
     }
-    energies_of(X, bc_targets, X_prev, X_prev2, options, check_finite, out);
+    energies_of(X, bc_targets, X_tilde, options, check_finite, out);
     if (options.gradient) {
         if (m_overwrite_dirichlet) {  // x_B = x*_B does not depend on z
             for (int v : m_model.bc_indices()) out.grad_x.middleRows<3>(3 * Index(v)).setZero();
@@ -91,8 +114,8 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
 }
 
 void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
-                                  const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
-                                  const LatentEnergyOptions& options, bool check_finite, LatentEnergies& out)
+                                  const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options,
+                                  bool check_finite, LatentEnergies& out)
 {
     const Index B = X.cols();
     const bool gradient = options.gradient;
@@ -116,14 +139,14 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
 #pragma omp parallel for schedule(dynamic, 1)
     for (Index job = 0; job < groups + (B - single); ++job) {
         if (job < groups) {
-            energies_of_columns(job * W, X, bc_targets, X_prev, X_prev2, gradient_scale, out);
+            energies_of_columns(job * W, X, bc_targets, X_tilde, gradient_scale, out);
             continue;
         }
         const Index i = single + (job - groups);
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
         VectorXd& xt = m_positions[size_t(omp_get_thread_num())];  // reused: no allocation per sample
         xt = X.col(i);
-        set_column_state(pot, i, bc_targets, X_prev, X_prev2);
+        set_column_state(pot, i, bc_targets, X_tilde);
         if (gradient) {
             VectorXd& g = m_gradients[size_t(omp_get_thread_num())];  // reused: no allocation per sample
             energies[i] = pot.value_gradient(xt, g);
@@ -139,14 +162,13 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
 
 void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X,
                                           const Eigen::Ref<const MatrixXd>& bc_targets,
-                                          const Eigen::Ref<const MatrixXd>& X_prev,
-                                          const Eigen::Ref<const MatrixXd>& X_prev2, const VectorXd& gradient_scale,
+                                          const Eigen::Ref<const MatrixXd>& X_tilde, const VectorXd& gradient_scale,
                                           LatentEnergies& out)
 {
     constexpr int W = Energy::kColumnLanes;
     const int thread = omp_get_thread_num();
     IncrementalPotential* pots = &m_lane_potentials[size_t(thread) * W];
-    for (int l = 0; l < W; ++l) set_column_state(pots[l], c0 + l, bc_targets, X_prev, X_prev2);
+    for (int l = 0; l < W; ++l) set_column_state(pots[l], c0 + l, bc_targets, X_tilde);
     ColumnWorkspace& ws = m_columns[size_t(thread)];
     VectorXd& x = m_positions[size_t(thread)];
     const Index n = X.rows();
@@ -201,10 +223,9 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
 }
 
 void LatentPotential::set_column_state(IncrementalPotential& pot, Index i, const Eigen::Ref<const MatrixXd>& bc_targets,
-                                       const Eigen::Ref<const MatrixXd>& X_prev,
-                                       const Eigen::Ref<const MatrixXd>& X_prev2)
+                                       const Eigen::Ref<const MatrixXd>& X_tilde)
 {
-    pot.set_previous(X_prev.col(i), X_prev2.col(i));
+    pot.set_x_tilde(X_tilde.col(i));
     pot.set_bc_targets(Eigen::Map<const MatrixX3d>(bc_targets.col(i).data(), bc_targets.rows() / 3, 3));
 }
 
@@ -217,13 +238,12 @@ LatentEnergies LatentPotential::evaluate_positions(const Eigen::Ref<const Matrix
     const Index B = X.cols();
     const Index n_dofs = m_model.num_dofs();
     const Index n_targets = 3 * Index(m_model.bc_indices().size());
-    if (X.rows() != n_dofs || bc_targets.rows() != n_targets || bc_targets.cols() != B || X_prev.rows() != n_dofs ||
-        X_prev.cols() != B || X_prev2.rows() != n_dofs || X_prev2.cols() != B ||
+    if (X.rows() != n_dofs || bc_targets.rows() != n_targets || bc_targets.cols() != B ||
         (options.weights.size() != 0 && options.weights.size() != B))
-        throw Error("LatentPotential::evaluate_positions: expected x, x_prev, x_prev2 of " + std::to_string(n_dofs) +
+        throw Error("LatentPotential::evaluate_positions: expected x of " + std::to_string(n_dofs) +
                     " rows, bc_targets of " + std::to_string(n_targets) + " rows, as many columns and 0 or B weights");
     LatentEnergies out;
-    energies_of(X, bc_targets, X_prev, X_prev2, options, true, out);
+    energies_of(X, bc_targets, checked_x_tilde("evaluate_positions", B, X_prev, X_prev2), options, true, out);
     return out;
 }
 

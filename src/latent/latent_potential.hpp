@@ -92,6 +92,15 @@ public:
     LatentEnergies evaluate(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
                             const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
                             const LatentEnergyOptions& options = {});
+    /// evaluate() with the steps' history given as x̃ = 2 x_{t−1} − x_{t−2} (3N × B), which is
+    /// all the potential reads of it (the inertia term): for callers that keep x̃, as the
+    /// integrator trainer does per training sample. The same numbers as evaluate() on the
+    /// x_{t−1}, x_{t−2} that x_tilde() turns into X_tilde.
+    LatentEnergies evaluate_tilde(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                  const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options = {});
+    /// x̃ = 2 x_{t−1} − x_{t−2} of every column, as InertiaEnergy::set_previous computes it (2x is
+    /// exact, so the numbers are the same whether or not the compiler fuses the two operations).
+    static MatrixXd x_tilde(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2);
 
     /// Compile the decoder as it is now and use that copy from here on (see above). The
     /// results equal the live decoder's to round-off (the folding reorders operations);
@@ -117,22 +126,24 @@ public:
 private:
     /// Energies, objective and (if options.gradient) weighted x-gradients of the columns of X.
     void energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
-                     const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
-                     const LatentEnergyOptions& options, bool check_finite, LatentEnergies& out);
+                     const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options, bool check_finite,
+                     LatentEnergies& out);
     /// energies_of's gradient pass for the Energy::kColumnLanes columns from c0 on: the terms
     /// with a column pass (the elastic ones) run on all of them at once, the others column
     /// by column; the same numbers as one IncrementalPotential::value_gradient per column, bit
     /// for bit (terms in the same order, each column's sums in the same order).
     void energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
-                             const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
-                             const VectorXd& gradient_scale, LatentEnergies& out);
-    /// Give `pot` column i's x_{t−1}, x_{t−2} (so x̃) and Dirichlet targets.
+                             const Eigen::Ref<const MatrixXd>& X_tilde, const VectorXd& gradient_scale,
+                             LatentEnergies& out);
+    /// Give `pot` column i's x̃ and Dirichlet targets.
     static void set_column_state(IncrementalPotential& pot, Index i, const Eigen::Ref<const MatrixXd>& bc_targets,
-                                 const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2);
-    /// evaluate(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
+                                 const Eigen::Ref<const MatrixXd>& X_tilde);
+    /// x_tilde(X_prev, X_prev2) after checking both are 3N × B (throws Error naming `caller`).
+    MatrixXd checked_x_tilde(const char* caller, Index B, const Eigen::Ref<const MatrixXd>& X_prev,
+                             const Eigen::Ref<const MatrixXd>& X_prev2) const;
+    /// evaluate_tilde(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
     LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
-                                    const Eigen::Ref<const MatrixXd>& X_prev,
-                                    const Eigen::Ref<const MatrixXd>& X_prev2, const LatentEnergyOptions& options,
+                                    const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options,
                                     bool check_finite);
 
     /// decode()'s positions of the features the (frozen or live) decoder gave, double or

@@ -129,6 +129,8 @@ void IncrementalPotential::set_previous(const Eigen::Ref<const VectorXd>& x_prev
     m_inertia->set_previous(x_prev, x_prev2);
 }
 
+void IncrementalPotential::set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde) { m_inertia->set_x_tilde(x_tilde); }
+
 const VectorXd& IncrementalPotential::x_tilde() const { return m_inertia->x_tilde(); }
 
 void IncrementalPotential::set_bc_targets(const MatrixX3d& targets)

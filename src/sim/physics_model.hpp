@@ -102,6 +102,8 @@ public:
 
     /// x̃ = 2 x_prev − x_prev2 (both 3N).
     void set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2);
+    /// x̃ itself (3N), for callers that keep it.
+    void set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde);
     /// Penalty targets x*_B (B×3); ignored without a penalty.
     void set_bc_targets(const MatrixX3d& targets);
 

@@ -230,6 +230,33 @@ TEST_P(LatentPotentialPhysics, ColumnPassEqualsOneColumnAtATimeBitForBit)
     EXPECT_GT(batch.grad_x.norm(), 0.0);
 }
 
+// The trainer hands the potential x̃ (cached per sample) instead of x_{t−1}, x_{t−2}: the same
+// numbers, bit for bit, as evaluate() and as an IncrementalPotential given the two states.
+TEST_P(LatentPotentialPhysics, EvaluateTildeEqualsEvaluateAndTheStepsPotentialBitForBit)
+{
+    const Index B = Energy::kColumnLanes + 3;
+    Problem p(GetParam().physics(), B, 13);
+    LatentEnergyOptions options;
+    options.gradient = true;
+    options.decoded = true;
+    LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
+    const LatentEnergies e = potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
+    const LatentEnergies t = potential.evaluate_tilde(p.Z, p.T, LatentPotential::x_tilde(p.X_prev, p.X_prev2), options);
+    EXPECT_TRUE(t.energies == e.energies);
+    EXPECT_TRUE(t.grad_z == e.grad_z);
+    EXPECT_GT(e.grad_z.norm(), 0.0);
+    IncrementalPotential step(*p.model, applied_penalty_weight(*p.model, kPenaltyWeight));
+    VectorXd g;
+    for (Index i = 0; i < B; ++i) {
+        step.set_previous(p.X_prev.col(i), p.X_prev2.col(i));
+        step.set_bc_targets(Eigen::Map<const MatrixX3d>(p.T.col(i).data(), p.T.rows() / 3, 3));
+        EXPECT_EQ(t.energies[i], step.value_gradient(t.X.col(i), g)) << "sample " << i;  // the gradient pass's sums
+    }
+    // Wrong shapes name what was given.
+    EXPECT_THROW(potential.evaluate_tilde(p.Z, p.T, p.X_prev.leftCols(B - 1), options), Error);
+    EXPECT_THROW(potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2.topRows(3), options), Error);
+}
+
 // The frozen decoder (the integrator trainers' path): the compiled double copy equals the
 // live decoder to round-off; the float32 copy (issue 14) to single-precision round-off, and
 // it really is single precision (not bit-identical to double).
