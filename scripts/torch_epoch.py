@@ -191,6 +191,22 @@ def make_integrator(n_in):
     return torch.nn.Sequential(*layers)
 
 
+def read_shell_dataset(f):
+    """Mesh, masses, gravity, Dirichlet set, dt, material and sequences of a `simulate` file."""
+    rest = f["rest_positions"][()]
+    triangles = f["elements"][()].astype(np.int64)
+    masses = f["masses"][()]
+    gravity = f["gravity"][()]
+    bc = f["bc/indices"][()].astype(np.int64)
+    dt = float(f.attrs["dt"])
+    material = [float(f.attrs[k]) for k in ("youngs_modulus", "poisson_ratio", "thickness")]
+    seqs = []
+    for key in f["sequences"]:
+        g = f["sequences"][key]
+        seqs.append((g["positions"][()], g["bc_params"][()], int(g.attrs["train_frames"])))
+    return rest, triangles, masses, gravity, bc, dt, material, seqs
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("dataset", help="HDF5 dataset of a shell scene (latentbench simulate)")
@@ -215,17 +231,12 @@ def main():
     with f:
         if f.attrs.get("object", b"") != b"shell":
             fail(args.dataset, "not a shell scene (this loop implements the cloth's energies)")
-        rest = f["rest_positions"][()]
-        triangles = f["elements"][()].astype(np.int64)
-        masses = f["masses"][()]
-        gravity = f["gravity"][()]
-        bc = f["bc/indices"][()].astype(np.int64)
-        dt = float(f.attrs["dt"])
-        material = [float(f.attrs[k]) for k in ("youngs_modulus", "poisson_ratio", "thickness")]
-        seqs = []
-        for key in f["sequences"]:
-            g = f["sequences"][key]
-            seqs.append((g["positions"][()], g["bc_params"][()], int(g.attrs["train_frames"])))
+        try:
+            rest, triangles, masses, gravity, bc, dt, material, seqs = read_shell_dataset(f)
+        except (KeyError, ValueError) as e:
+            fail(args.dataset, f"not a latentbench shell dataset ({e})")
+    if triangles.ndim != 2 or triangles.shape[1] != 3 or not seqs:
+        fail(args.dataset, f"expected triangles (T × 3) and at least one sequence, got {triangles.shape}")
     shell = Shell(rest, triangles, *material)
     potential = Potential(shell, masses, gravity, dt, bc, dtype)
     N = rest.shape[0]
