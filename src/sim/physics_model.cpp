@@ -133,7 +133,7 @@ void IncrementalPotential::set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde
 
 const VectorXd& IncrementalPotential::x_tilde() const { return m_inertia->x_tilde(); }
 
-void IncrementalPotential::set_bc_targets(const MatrixX3d& targets)
+void IncrementalPotential::set_bc_targets(const Eigen::Ref<const MatrixX3d>& targets)
 {
     if (m_penalty) m_penalty->set_targets(targets);
 }

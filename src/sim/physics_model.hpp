@@ -105,7 +105,7 @@ public:
     /// x̃ itself (3N), for callers that keep it.
     void set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde);
     /// Penalty targets x*_B (B×3); ignored without a penalty.
-    void set_bc_targets(const MatrixX3d& targets);
+    void set_bc_targets(const Eigen::Ref<const MatrixX3d>& targets);
 
     const EnergySum& terms() const { return m_sum; }
     double value(const VectorXd& x) const { return m_sum.value(x); }
