@@ -195,6 +195,10 @@ LB_TRAIN_BENCH(armadillo);
 LB_TRAIN_BENCH(bunny_ears);
 LB_TRAIN_BENCH_FLOAT32(cloth);
 LB_TRAIN_BENCH_FLOAT32(cantilever);
+LB_TRAIN_BENCH_FLOAT32(rods_translate);
+LB_TRAIN_BENCH_FLOAT32(rods_rotate);
+LB_TRAIN_BENCH_FLOAT32(armadillo);
+LB_TRAIN_BENCH_FLOAT32(bunny_ears);
 
 } // namespace
 } // namespace lb
