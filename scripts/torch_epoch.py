@@ -33,16 +33,19 @@ Needs Debian's python3-torch (not one of latentbench's dependencies):
 """
 import argparse
 import math
+import os
 import sys
 import time
 
-import h5py
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import plotting_common as pc  # noqa: E402  (the project's dataset reader and error exit)
 
 try:
     import torch
 except ImportError:
-    sys.exit("torch_epoch.py: PyTorch is not installed (Debian: apt-get install python3-torch)")
+    pc.fail("PyTorch is not installed (Debian: apt-get install python3-torch)")
 
 # Table 1/2 sizes of the full cloth (paper/paper_numbers.cpp).
 LATENT = 4
@@ -52,11 +55,6 @@ PCA_DIM = 50
 PENALTY = 1e5
 NOISE_FRACTION = 0.1
 BALANCING_FLOOR = 0.05
-
-
-def fail(path, message):
-    print(f"torch_epoch.py: {path}: {message}", file=sys.stderr)
-    sys.exit(1)
 
 
 class Shell:
@@ -191,20 +189,27 @@ def make_integrator(n_in):
     return torch.nn.Sequential(*layers)
 
 
-def read_shell_dataset(f):
-    """Mesh, masses, gravity, Dirichlet set, dt, material and sequences of a `simulate` file."""
-    rest = f["rest_positions"][()]
-    triangles = f["elements"][()].astype(np.int64)
-    masses = f["masses"][()]
-    gravity = f["gravity"][()]
-    bc = f["bc/indices"][()].astype(np.int64)
-    dt = float(f.attrs["dt"])
-    material = [float(f.attrs[k]) for k in ("youngs_modulus", "poisson_ratio", "thickness")]
-    seqs = []
-    for key in f["sequences"]:
-        g = f["sequences"][key]
-        seqs.append((g["positions"][()], g["bc_params"][()], int(g.attrs["train_frames"])))
-    return rest, triangles, masses, gravity, bc, dt, material, seqs
+def read_shell_dataset(path):
+    """Mesh, masses, gravity, Dirichlet set, dt, material and sequences (positions, boundary
+    parameters, train_frames) of a shell scene's `simulate` file: plotting_common.Dataset's
+    reading and checks, plus the fields only the physics needs. Raises pc.InputError."""
+    data = pc.Dataset(path)
+    if data.object != "shell" or data.elements.shape[1] != 3:
+        raise pc.InputError(f"'{path}' is not a shell scene (this loop implements the cloth's energies)")
+    with pc.open_h5(path) as f:
+        try:
+            masses = np.asarray(f["masses"][()], dtype=float)
+            gravity = np.asarray(f["gravity"][()], dtype=float)
+            material = [float(f.attrs[k]) for k in ("youngs_modulus", "poisson_ratio", "thickness")]
+            params = {key: np.asarray(f["sequences"][key]["bc_params"][()], dtype=float) for key, _ in data.sequences}
+        except (KeyError, OSError, ValueError, TypeError) as exc:
+            raise pc.InputError(f"'{path}' is not a latentbench shell dataset ({exc})") from None
+    if masses.shape != (len(data.rest),):
+        raise pc.InputError(f"'{path}': masses has shape {masses.shape}, expected ({len(data.rest)},)")
+    seqs = [(data.ground_truth(key)[0], params[key], data.train_frames[key]) for key, _ in data.sequences]
+    if not seqs:
+        raise pc.InputError(f"'{path}' has no sequences")
+    return data.rest, data.elements, masses, gravity, data.bc_indices, data.dt, material, seqs
 
 
 def main():
@@ -224,19 +229,11 @@ def main():
     rng = np.random.default_rng(args.seed)
     dtype = torch.float32 if args.dtype == "float32" else torch.float64
 
+    pc.require_h5py()
     try:
-        f = h5py.File(args.dataset, "r")
-    except OSError as e:
-        fail(args.dataset, f"cannot open ({e})")
-    with f:
-        if f.attrs.get("object", b"") != b"shell":
-            fail(args.dataset, "not a shell scene (this loop implements the cloth's energies)")
-        try:
-            rest, triangles, masses, gravity, bc, dt, material, seqs = read_shell_dataset(f)
-        except (KeyError, ValueError) as e:
-            fail(args.dataset, f"not a latentbench shell dataset ({e})")
-    if triangles.ndim != 2 or triangles.shape[1] != 3 or not seqs:
-        fail(args.dataset, f"expected triangles (T × 3) and at least one sequence, got {triangles.shape}")
+        rest, triangles, masses, gravity, bc, dt, material, seqs = read_shell_dataset(args.dataset)
+    except pc.InputError as exc:
+        pc.fail(str(exc))
     shell = Shell(rest, triangles, *material)
     potential = Potential(shell, masses, gravity, dt, bc, dtype)
     N = rest.shape[0]
@@ -255,7 +252,7 @@ def main():
         print(f"energy check: max |free gradient| at 198 Newton solutions = {residual:.3e} "
               f"({residual / weight:.2e} × |M g|)")
         if not residual / weight < 1e-4:
-            fail(args.dataset, "the energies do not match the simulator's (gradient not ~0 at its solutions)")
+            pc.fail(f"'{args.dataset}': the energies do not match the simulator's (gradient not ~0 at its solutions)")
         shell.to(dtype)
 
     # Samples: frames t = 2 .. train_frames − 1 of every sequence, BC-relative features.
