@@ -39,7 +39,7 @@ void InertiaEnergy::set_previous(const Eigen::Ref<const VectorXd>& x_prev, const
 {
     require_size("set_previous", x_prev.size());
     require_size("set_previous", x_prev2.size());
-    m_x_tilde.noalias() = 2.0 * x_prev - x_prev2;
+    m_x_tilde.noalias() = inertial_target(x_prev, x_prev2);
 }
 
 double InertiaEnergy::local_value(Index i, const ElementVector& xe) const

@@ -9,6 +9,16 @@
 
 namespace lb {
 
+/// The inertial target x̃ = 2 x_{t−1} − x_{t−2}, column by column for matrices (an Eigen
+/// expression, evaluated where it is assigned). The one formula: InertiaEnergy::set_previous
+/// and the callers that keep x̃ themselves (the integrator trainer caches it per sample) use
+/// it, so x̃ is the same bit for bit wherever it is formed.
+template <typename Prev, typename Prev2>
+auto inertial_target(const Eigen::MatrixBase<Prev>& x_prev, const Eigen::MatrixBase<Prev2>& x_prev2)
+{
+    return 2.0 * x_prev.derived() - x_prev2.derived();
+}
+
 class InertiaEnergy final : public ElementEnergy<1> {
 public:
     /// @param masses  N lumped vertex masses (kg), non-negative
@@ -23,7 +33,7 @@ public:
 
     /// @param x_tilde  3N inertial target 2 x_{t−1} − x_{t−2}, xyz interleaved
     void set_x_tilde(const Eigen::Ref<const VectorXd>& x_tilde);
-    /// x̃ = 2 x_prev − x_prev2, formed in place (no temporary; both 3N).
+    /// x̃ = inertial_target(x_prev, x_prev2), formed in place (no temporary; both 3N).
     void set_previous(const Eigen::Ref<const VectorXd>& x_prev, const Eigen::Ref<const VectorXd>& x_prev2);
     const VectorXd& x_tilde() const { return m_x_tilde; }
     const VectorXd& masses() const { return m_masses; }

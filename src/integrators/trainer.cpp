@@ -11,6 +11,7 @@
 #include "core/log.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "energy/inertia_energy.hpp"
 #include "io/hdf5.hpp"
 #include "nn/adam.hpp"
 #include "nn/checkpoint.hpp"
@@ -241,7 +242,7 @@ void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
 {
     const MatrixXd X1 = m_potential.decode(samples.z_prev, samples.targets_prev);
     const MatrixXd X2 = m_potential.decode(samples.z_prev2, samples.targets_prev2);
-    m_cached_tilde = LatentPotential::x_tilde(X1, X2);
+    m_cached_tilde = inertial_target(X1, X2);
     m_cached_speeds = balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity);
 }
 
@@ -263,7 +264,7 @@ void IntegratorTrainer::step_inputs(const IntegratorBatch& batch, MatrixXd& X_ti
     // the round-off of the columns at a block's edge) stay those the published fits had.
     const MatrixXd X1 = m_potential.decode(batch.z_prev.rightCols(decoded), batch.targets_prev.rightCols(decoded));
     const MatrixXd X2 = m_potential.decode(batch.z_prev2.rightCols(decoded), batch.targets_prev2.rightCols(decoded));
-    X_tilde.rightCols(decoded) = LatentPotential::x_tilde(X1, X2);
+    X_tilde.rightCols(decoded) = inertial_target(X1, X2);
     if (speeds.size() != 0)
         speeds.tail(decoded) = balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity);
 }

@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "core/error.hpp"
+#include "energy/inertia_energy.hpp"
 
 namespace lb {
 
@@ -60,11 +61,6 @@ LatentEnergies LatentPotential::evaluate_tilde(const Eigen::Ref<const MatrixXd>&
     return evaluate_columns(Z, bc_targets, X_tilde, options, true);
 }
 
-MatrixXd LatentPotential::x_tilde(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2)
-{
-    return 2.0 * X_prev - X_prev2;
-}
-
 namespace {
 std::string shape(const Eigen::Ref<const MatrixXd>& m) { return std::to_string(m.rows()) + "×" + std::to_string(m.cols()); }
 } // namespace
@@ -76,7 +72,7 @@ MatrixXd LatentPotential::checked_x_tilde(const char* caller, Index B, const Eig
     if (X_prev.rows() != n_dofs || X_prev.cols() != B || X_prev2.rows() != n_dofs || X_prev2.cols() != B)
         throw Error(std::string("LatentPotential::") + caller + ": x_prev " + shape(X_prev) + ", x_prev2 " +
                     shape(X_prev2) + "; expected " + std::to_string(n_dofs) + " × " + std::to_string(B) + " each");
-    return x_tilde(X_prev, X_prev2);
+    return inertial_target(X_prev, X_prev2);
 }
 
 LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,

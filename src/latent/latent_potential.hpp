@@ -95,12 +95,9 @@ public:
     /// evaluate() with the steps' history given as x̃ = 2 x_{t−1} − x_{t−2} (3N × B), which is
     /// all the potential reads of it (the inertia term): for callers that keep x̃, as the
     /// integrator trainer does per training sample. The same numbers as evaluate() on the
-    /// x_{t−1}, x_{t−2} that x_tilde() turns into X_tilde.
+    /// x_{t−1}, x_{t−2} that inertial_target() (energy/inertia_energy.hpp) turns into X_tilde.
     LatentEnergies evaluate_tilde(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
                                   const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options = {});
-    /// x̃ = 2 x_{t−1} − x_{t−2} of every column, as InertiaEnergy::set_previous computes it (2x is
-    /// exact, so the numbers are the same whether or not the compiler fuses the two operations).
-    static MatrixXd x_tilde(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2);
 
     /// Compile the decoder as it is now and use that copy from here on (see above). The
     /// results equal the live decoder's to round-off (the folding reorders operations);
@@ -138,7 +135,7 @@ private:
     /// Give `pot` column i's x̃ and Dirichlet targets.
     static void set_column_state(IncrementalPotential& pot, Index i, const Eigen::Ref<const MatrixXd>& bc_targets,
                                  const Eigen::Ref<const MatrixXd>& X_tilde);
-    /// x_tilde(X_prev, X_prev2) after checking both are 3N × B (throws Error naming `caller`).
+    /// inertial_target(X_prev, X_prev2) after checking both are 3N × B (throws Error naming `caller`).
     MatrixXd checked_x_tilde(const char* caller, Index B, const Eigen::Ref<const MatrixXd>& X_prev,
                              const Eigen::Ref<const MatrixXd>& X_prev2) const;
     /// evaluate_tilde(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.

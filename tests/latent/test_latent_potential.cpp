@@ -12,6 +12,7 @@
 #include <ostream>
 
 #include "core/error.hpp"
+#include "energy/inertia_energy.hpp"
 #include "latent/latent_potential.hpp"
 #include "latent/latent_test_support.hpp"
 #include "support/finite_difference.hpp"
@@ -241,7 +242,7 @@ TEST_P(LatentPotentialPhysics, EvaluateTildeEqualsEvaluateAndTheStepsPotentialBi
     options.decoded = true;
     LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
     const LatentEnergies e = potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, options);
-    const LatentEnergies t = potential.evaluate_tilde(p.Z, p.T, LatentPotential::x_tilde(p.X_prev, p.X_prev2), options);
+    const LatentEnergies t = potential.evaluate_tilde(p.Z, p.T, inertial_target(p.X_prev, p.X_prev2), options);
     EXPECT_TRUE(t.energies == e.energies);
     EXPECT_TRUE(t.grad_z == e.grad_z);
     EXPECT_GT(e.grad_z.norm(), 0.0);
