@@ -17,9 +17,10 @@ void print_plan(const ExperimentConfig& ex, const std::string& run_dir)
         const Scene scene = load_scene(s.scene_path, {s.variant});
         long frames = 0;
         for (const SequenceSpec& q : scene.sequences) frames += q.frames;
+        const AutoencoderOptions ao = resolved_autoencoder(s, scene);  // the per-scene latent default filled in
         std::printf("  %s: %s, %ld vertices, %zu sequences, %ld frames; autoencoder latent %ld, %d epochs\n",
                     s.label.c_str(), s.scene_path.c_str(), long(scene.mesh.num_vertices()), scene.sequences.size(),
-                    frames, long(s.autoencoder.latent_dim), s.autoencoder.epochs);
+                    frames, long(ao.latent_dim), ao.epochs);
         for (const MethodSpec& m : s.methods)
             std::printf("    %-20s %s\n", m.name.c_str(), m.method->method_name().c_str());
     }

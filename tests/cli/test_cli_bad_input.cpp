@@ -1,5 +1,6 @@
 // Bad input through the CLI: a message naming the problem, a non-zero exit,
 // and no output file left behind.
+#include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -111,6 +112,32 @@ TEST(Cli, SimulateWritesReadableDataset)
     EXPECT_NE(info.output.find("tiny"), std::string::npos) << info.output;
 }
 
+
+// `run --check` prints the autoencoder each scene will train: the per-scene latent default
+// (armadillo 12, cantilever 4) when the suite leaves `latent` unset, the suite's value when set.
+TEST(Cli, RunCheckPrintsTheResolvedLatent)
+{
+    const std::string dir = fresh_dir("cli_run_check");
+    const std::string scenes = std::string(LB_SOURCE_DIR) + "/experiments/scenes/";
+    const std::string suite = "name = \"x\"\n[[integrators]]\nname = \"pca\"\nmethod = \"linear_pca\"\n"
+                              "[[scenes]]\nscene = \"" + scenes + "armadillo.toml\"\nvariant = \"small\"\n"
+                              "[[scenes]]\nscene = \"" + scenes + "cantilever.toml\"\nvariant = \"small\"\n"
+                              "[[scenes]]\nscene = \"" + scenes + "cantilever.toml\"\nvariant = \"small\"\n"
+                              "label = \"cantilever_6\"\n[scenes.autoencoder]\nlatent = 6\n";
+    write_file(dir + "/suite.toml", suite);
+    const auto r = run_cli("run " + dir + "/suite.toml -o " + dir + "/run --check");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (const char* line : {"armadillo_small: ", "cantilever_small: ", "cantilever_6: "}) EXPECT_NE(r.output.find(line), std::string::npos) << r.output;
+    const auto latent_of = [&](const std::string& label) {
+        const std::size_t at = r.output.find("  " + label + ": ");
+        const std::size_t l = r.output.find("autoencoder latent ", at);
+        return std::stoi(r.output.substr(l + 19));
+    };
+    EXPECT_EQ(latent_of("armadillo_small"), 12);
+    EXPECT_EQ(latent_of("cantilever_small"), 4);
+    EXPECT_EQ(latent_of("cantilever_6"), 6);
+    EXPECT_FALSE(fs::exists(dir + "/run"));
+}
 // Methods from the command line through the registry: `fit --method linear_pca`, then
 // `rollout` rebuilds the method from the artefact alone (no --ae needed); a bad option,
 // an unknown method or key, a latent method without --ae and a non-artefact file are
