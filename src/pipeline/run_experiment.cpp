@@ -117,6 +117,9 @@ public:
         }
         write_status(m_plan.run_dir, u.id, "running", "");
         try {
+            // Each unit makes the directories it writes to: a fit or eval unit after the
+            // user removed `integrators/` or `rollouts/` to redo them.
+            for (const UnitOutput& o : u.outputs) fs::create_directories(fs::path(o.file).parent_path());
             switch (u.kind) {
             case UnitKind::Scene: run_scene(u); break;
             case UnitKind::Fit: run_fit(u); break;
@@ -206,8 +209,6 @@ private:
     void run_scene(const Unit& u)
     {
         const SceneSpec& spec = m_points[u.point_index]->scenes[u.scene_index];
-        fs::create_directories(u.scene_dir + "/integrators");
-        fs::create_directories(u.scene_dir + "/rollouts");
         LoadedScene& ls = m_loaded[u.id];
         ls.scene = load_scene(spec.scene_path, {spec.variant});
         const std::string& data_file = u.outputs[0].file;

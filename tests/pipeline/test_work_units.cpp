@@ -2,6 +2,7 @@
 #include "lb_paths.hpp"
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -226,6 +227,38 @@ TEST(WorkUnits, UnitRunsOnceAndOnlyAfterItsDependencies)
     EXPECT_NE(table.find("| sweep point "), std::string::npos) << table;
     EXPECT_NE(table.find("training.noise_fraction=0.2, seeds=4"), std::string::npos) << table;
     EXPECT_NE(table.find("all points"), std::string::npos) << table;  // pca and full_space
+}
+
+// A fit or eval unit makes the directory it writes to: after `integrators/` and `rollouts/`
+// are removed (to redo them, or a scene's files copied in by hand) the units still run.
+TEST(WorkUnits, FitAndEvalUnitsMakeTheirDirectories)
+{
+    set_log_level(LogLevel::Quiet);
+    const ExperimentConfig ex = load_experiment(write_suite("directories", kSwept), builtin_methods());
+    RunOptions options;
+    options.output_dir = fresh_dir("units_directories_run");
+    const ExperimentPlan plan = plan_experiment(ex, options.output_dir);
+    const Unit* fit = nullptr;
+    const Unit* eval = nullptr;
+    for (const Unit& u : plan.units) {
+        if (!fit && u.kind == UnitKind::Fit) fit = &u;
+    }
+    ASSERT_NE(fit, nullptr);
+    for (const Unit& u : plan.units) {
+        if (u.kind == UnitKind::Eval && std::find(u.depends_on.begin(), u.depends_on.end(), fit->id) != u.depends_on.end())
+            eval = &u;
+    }
+    ASSERT_NE(eval, nullptr);
+    run_unit(ex, fit->scene_unit, options);
+    const fs::path integrators = fs::path(fit->outputs[0].file).parent_path();
+    const fs::path rollouts = fs::path(eval->outputs[0].file).parent_path();
+    fs::remove_all(integrators);
+    fs::remove_all(rollouts);
+    ASSERT_FALSE(fs::exists(integrators));
+    EXPECT_EQ(run_unit(ex, fit->id, options).stages_run, 1);
+    EXPECT_TRUE(fs::exists(fit->outputs[0].file));
+    EXPECT_EQ(run_unit(ex, eval->id, options).stages_run, 1);
+    EXPECT_TRUE(fs::exists(eval->outputs[0].file));
 }
 
 TEST(WorkUnits, MergeNamesEveryMissingOrFailedUnitAndWritesNothing)
