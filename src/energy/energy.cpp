@@ -13,10 +13,16 @@ double Energy::value(const VectorXd& x) const
 {
     double sum = 0.0;
     const Index n = num_elements();
-#pragma omp parallel for reduction(+ : sum) schedule(static) if (n >= kParallelElementThreshold)
-    for (Index e = 0; e < n; ++e) {
-        sum += element_value(e, x);
+    if (serial_value_gradient()) {
+        for (Index e = 0; e < n; ++e) sum += element_value(e, x);
+        return sum;
     }
+    // Element values in parallel, summed serially in element order: the one-thread sum,
+    // whatever the thread count (an OpenMP reduction's partial sums follow the threads).
+    std::vector<double> values(static_cast<size_t>(n));
+#pragma omp parallel for schedule(static)
+    for (Index e = 0; e < n; ++e) values[size_t(e)] = element_value(e, x);
+    for (Index e = 0; e < n; ++e) sum += values[size_t(e)];
     return sum;
 }
 
@@ -66,13 +72,21 @@ double Energy::add_value_gradient(const VectorXd& x, double weight, VectorXd& g)
         }
         return sum;
     }
-    // As add_gradient: element gradients in parallel, scattered serially.
+    // As add_gradient: element gradients in parallel, scattered serially; the values summed
+    // serially too, in element order (as value()). This branch (top level, large meshes,
+    // several threads) has no caller in the pipeline, which calls it inside parallel regions;
+    // it gives the serial pass's numbers for the cloth's terms, not bit for bit for the
+    // lane-blocked tetrahedra (TetStVK), whose serial pass runs its own element order.
     std::vector<double> local(static_cast<size_t>(n * dofs));
-#pragma omp parallel for reduction(+ : sum) schedule(static)
+    std::vector<double> values(static_cast<size_t>(n));
+#pragma omp parallel for schedule(static)
     for (Index e = 0; e < n; ++e) {
-        sum += element_value_gradient(e, x, local.data() + e * dofs);
+        values[size_t(e)] = element_value_gradient(e, x, local.data() + e * dofs);
     }
-    for (Index e = 0; e < n; ++e) scatter(e, local.data() + e * dofs);
+    for (Index e = 0; e < n; ++e) {
+        sum += values[size_t(e)];
+        scatter(e, local.data() + e * dofs);
+    }
     return sum;
 }
 

@@ -605,6 +605,17 @@ int column_blocks(Index columns)
     return int(std::min<Index>(omp_get_max_threads(), columns / 32));
 }
 
+/// First column of `block` of `blocks` over `columns`. Inner edges fall on multiples of 8, so
+/// every block but the last is whole panels of Eigen's GEMM kernel (4 columns wide; its last
+/// columns, short of a panel, take another kernel with another rounding): each column then
+/// gets the round-off it gets in the one-block product, and a batch's numbers do not depend
+/// on the thread count.
+Index block_start(int block, int blocks, Index columns)
+{
+    if (block >= blocks) return columns;
+    return columns * block / blocks / 8 * 8;
+}
+
 } // namespace
 
 template <typename S>
@@ -624,7 +635,7 @@ void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, 
     const int blocks = column_blocks(B);
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
     for (int block = 0; block < blocks; ++block) {
-        const Index c0 = B * block / blocks, n = B * (block + 1) / blocks - c0;
+        const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
         for (std::size_t i = 0; i < m_ops.size(); ++i) {
             const Op& op = m_ops[i];
             const auto src = m_batch[static_cast<std::size_t>(op.src)].middleCols(c0, n);
@@ -671,7 +682,7 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
     const int blocks = column_blocks(B);
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
     for (int block = 0; block < blocks; ++block) {
-        const Index c0 = B * block / blocks, n = B * (block + 1) / blocks - c0;
+        const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
         // Zeroed for accumulation, except the output's when the output layer reads dY.
         for (std::size_t b = 0; b < m_batch_adjoint.size(); ++b) {
             if (!(direct && int(b) == m_output)) m_batch_adjoint[b].middleCols(c0, n).setZero();

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <atomic>
 #include <cstdlib>
 
@@ -243,6 +245,40 @@ TEST(InferenceNetwork, BatchedForwardAndVjpMatchSequential)
         EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 4), G), std::invalid_argument) << name;
         EXPECT_THROW(fast_d.forward_batch(MatrixXd::Zero(in + 1, 3), Y), std::invalid_argument) << name;
     }
+}
+
+/// The batched passes give the same numbers bit for bit on one thread and on several: the
+/// column blocks' inner edges fall on whole GEMM panels. Batch sizes whose halves and thirds
+/// are not multiples of 4 put a block edge inside a panel if the edges are not rounded.
+TEST(InferenceNetwork, BatchedPassesDoNotDependOnTheThreadCount)
+{
+    Rng rng(86);
+    Sequential net = make_mlp(table2_architectures().front().decoder, rng);
+    test::randomize_batch_norm(net, rng);
+    InferenceNetworkD fast_d(net);
+    InferenceNetwork fast_f(net);
+    const Index in = fast_d.in_features(), out = fast_d.out_features();
+    const int threads_before = omp_get_max_threads();
+    for (Index B : {Index(203), Index(298), Index(499)}) {
+        const MatrixXd Z = test::random_matrix(in, B, rng, -2, 2);
+        const MatrixXd V = test::random_matrix(out, B, rng, -1, 1);
+        std::vector<MatrixXd> Y(3), G(3);
+        std::vector<MatrixXf> Yf(3), Gf(3);
+        for (int t = 1; t <= 3; ++t) {
+            omp_set_num_threads(t);
+            fast_d.forward_batch(Z, Y[size_t(t - 1)], true);
+            fast_d.vjp_batch(V, G[size_t(t - 1)]);
+            fast_f.forward_batch(Z.cast<float>(), Yf[size_t(t - 1)], true);
+            fast_f.vjp_batch(V.cast<float>(), Gf[size_t(t - 1)]);
+        }
+        for (size_t t = 1; t < 3; ++t) {
+            EXPECT_TRUE((Y[t].array() == Y[0].array()).all()) << "B=" << B << ", " << t + 1 << " threads";
+            EXPECT_TRUE((G[t].array() == G[0].array()).all()) << "B=" << B << ", " << t + 1 << " threads";
+            EXPECT_TRUE((Yf[t].array() == Yf[0].array()).all()) << "B=" << B << ", " << t + 1 << " threads (float)";
+            EXPECT_TRUE((Gf[t].array() == Gf[0].array()).all()) << "B=" << B << ", " << t + 1 << " threads (float)";
+        }
+    }
+    omp_set_num_threads(threads_before);
 }
 
 TEST(InferenceNetwork, EvaluateAndJacobianRowsDoNotAllocate)
