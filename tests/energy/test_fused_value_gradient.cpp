@@ -19,13 +19,19 @@
 namespace lb {
 namespace {
 
-void check_scene(const std::string& scene_name, Mesh mesh)
+/// The scene's physics (materials, dt) on a generated mesh, vertex 0 fixed.
+PhysicsModel model_on(const std::string& scene_name, Mesh mesh)
 {
     const Scene scene = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene_name + ".toml");
     PhysicsSpec spec = physics_spec(scene);
     spec.mesh = std::move(mesh);
     spec.bc_indices = {0};
-    const PhysicsModel model(spec);
+    return PhysicsModel(spec);
+}
+
+void check_scene(const std::string& scene_name, Mesh mesh)
+{
+    const PhysicsModel model = model_on(scene_name, std::move(mesh));
     Rng rng(7);
     const VectorXd x = lb::testing::perturbed_state(model.mesh().rest_positions, 0.02 * model.length_scale(), rng);
     bool large = false;
@@ -69,11 +75,7 @@ TEST(FusedValueGradient, LargeSolidTerms)
 /// the lane-blocked serial pass of the tetrahedra (energy.cpp), and no caller reaches it.
 void check_thread_count(const std::string& scene_name, Mesh mesh, bool fused_too)
 {
-    const Scene scene = load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene_name + ".toml");
-    PhysicsSpec spec = physics_spec(scene);
-    spec.mesh = std::move(mesh);
-    spec.bc_indices = {0};
-    const PhysicsModel model(spec);
+    const PhysicsModel model = model_on(scene_name, std::move(mesh));
     Rng rng(8);
     const VectorXd x = lb::testing::perturbed_state(model.mesh().rest_positions, 0.02 * model.length_scale(), rng);
     const int threads_before = omp_get_max_threads();
