@@ -192,13 +192,25 @@ TEST(WorkUnits, MalformedSweepIsRefusedNamingFileAndKey)
     EXPECT_FALSE(fs::exists(run_dir + "/manifest.jsonl"));
 }
 
+/// The swept suite loaded from a fresh directory, its run directory and its plan.
+struct SweptRun {
+    explicit SweptRun(const std::string& name)
+        : ex((set_log_level(LogLevel::Quiet), load_experiment(write_suite(name, kSwept), builtin_methods())))
+    {
+        options.output_dir = fresh_dir("units_" + name + "_run");
+        plan = plan_experiment(ex, options.output_dir);
+    }
+    ExperimentConfig ex;
+    RunOptions options;
+    ExperimentPlan plan;
+};
+
 TEST(WorkUnits, UnitRunsOnceAndOnlyAfterItsDependencies)
 {
-    set_log_level(LogLevel::Quiet);
-    const ExperimentConfig ex = load_experiment(write_suite("idempotent", kSwept), builtin_methods());
-    RunOptions options;
-    options.output_dir = fresh_dir("units_idempotent_run");
-    const ExperimentPlan plan = plan_experiment(ex, options.output_dir);
+    SweptRun run("idempotent");
+    const ExperimentConfig& ex = run.ex;
+    RunOptions& options = run.options;
+    const ExperimentPlan& plan = run.plan;
 
     // A unit whose dependency has not run is refused, naming the dependency.
     try {
@@ -233,11 +245,10 @@ TEST(WorkUnits, UnitRunsOnceAndOnlyAfterItsDependencies)
 // are removed (to redo them, or a scene's files copied in by hand) the units still run.
 TEST(WorkUnits, FitAndEvalUnitsMakeTheirDirectories)
 {
-    set_log_level(LogLevel::Quiet);
-    const ExperimentConfig ex = load_experiment(write_suite("directories", kSwept), builtin_methods());
-    RunOptions options;
-    options.output_dir = fresh_dir("units_directories_run");
-    const ExperimentPlan plan = plan_experiment(ex, options.output_dir);
+    SweptRun run("directories");
+    const ExperimentConfig& ex = run.ex;
+    RunOptions& options = run.options;
+    const ExperimentPlan& plan = run.plan;
     const Unit* fit = nullptr;
     const Unit* eval = nullptr;
     for (const Unit& u : plan.units) {
