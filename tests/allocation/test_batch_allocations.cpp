@@ -1,0 +1,122 @@
+// Heap allocations of the integrator trainer's batches. The production epoch
+// (nn::EpochRunner over the trainer's learner, as run_training_loop and train_epoch/<scene>
+// run it) on the small cloth with the paper's decoder (200×3 + PCA 50) and integrator widths,
+// noise and balancing on. Issue 14 asks for nothing allocated per batch; that is not met
+// (about 120 blocks per batch, README "Latent integrators"): what is guarded here is that
+// nothing is allocated per sample.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <memory>
+
+#include "allocation/heap_counter.hpp"
+#include "core/allocator.hpp"
+#include "integrators/trainer.hpp"
+#include "nn/training_loop.hpp"
+#include "paper/scene_defaults.hpp"
+#include "support/small_scene.hpp"
+
+namespace lb {
+namespace {
+
+struct ClothProblem {
+    Dataset data;
+    std::unique_ptr<PhysicsModel> model;
+    std::unique_ptr<Autoencoder> ae;
+    TrainingSamples samples;
+
+    ClothProblem()
+    {
+        data = testing::simulate_small_scene("cloth", 160);
+        model = std::make_unique<PhysicsModel>(data.physics);
+        AutoencoderOptions ao;
+        ao.latent_dim = default_latent_dim("cloth");
+        ao.hidden = {200, 200, 200};
+        ao.pca_dim = 50;
+        ao.progress = false;
+        ae = std::make_unique<Autoencoder>(data.physics, ao, 5);
+        ae->initialize_pca(ae->encoding().to_features(training_frames(data).positions));
+        samples = make_training_samples(*ae, data);
+    }
+};
+
+ClothProblem& cloth()
+{
+    static ClothProblem problem;
+    return problem;
+}
+
+struct AllocationCase {
+    const char* name;
+    IntegratorLoss loss;
+    bool float32_decoder;
+    bool overwrite_dirichlet;
+};
+
+class EpochAllocations : public ::testing::TestWithParam<AllocationCase> {
+protected:
+    struct Count {
+        double per_batch;  ///< heap allocations per batch over two epochs after two warm-up epochs
+        double samples;    ///< mean samples per batch (near-equal batches of at most batch_size)
+    };
+    Count allocations_per_batch(Index batch_size)
+    {
+        ClothProblem& p = cloth();
+        IntegratorTrainOptions o;
+        o.loss = GetParam().loss;
+        o.float32_decoder = GetParam().float32_decoder;
+        o.overwrite_dirichlet = GetParam().overwrite_dirichlet;
+        o.hidden = default_integrator_hidden("cloth");
+        o.batch_size = batch_size;
+        o.progress = false;
+        LatentMlpModel net = LatentMlpModel::create(p.ae->latent_dim(), p.samples.p.rows(), o.hidden, o.seed);
+        IntegratorTrainer trainer(*p.model, *p.ae, o);
+        trainer.prepare(net, p.samples);
+        const std::unique_ptr<nn::Learner> learner = trainer.learner(net, p.samples);
+        nn::EpochRunner runner(*learner, trainer.loop_options());
+        EXPECT_GE(runner.num_batches(), 2) << p.samples.size() << " samples";
+        for (int epoch = 0; epoch < 2; ++epoch) runner.run(epoch);  // warm-up
+        testing::HeapCounter counter;
+        for (int epoch = 2; epoch < 4; ++epoch) runner.run(epoch);
+        const double batches = double(runner.num_batches());
+        return {double(counter.count()) / (2.0 * batches), double(p.samples.size()) / batches};
+    }
+};
+
+// A batch allocates about as many blocks whatever its size: nothing per sample (the batch's
+// matrices, the network passes and the energies' per-thread buffers are made or resized
+// once per batch, never per column). Batches of at most 32 and 128 samples.
+TEST_P(EpochAllocations, DoNotGrowWithTheBatch)
+{
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
+    keep_freed_memory();
+    const Count small = allocations_per_batch(32);
+    const Count large = allocations_per_batch(128);
+    std::printf("[ allocations per batch: %.1f with %.1f samples, %.1f with %.1f ]\n", small.per_batch, small.samples,
+                large.per_batch, large.samples);
+    EXPECT_GT(small.per_batch, 0.0);  // the counter sees the trainer's allocations
+    // One allocation per sample would add one per added sample (per column two); the count
+    // moves by a few between sizes (Eigen's GEMM packs on the stack or the heap by size, and
+    // the threads' share of the per-column energy jobs varies): allow under one per two.
+    EXPECT_LT(large.per_batch - small.per_batch, 0.5 * (large.samples - small.samples));
+}
+
+INSTANTIATE_TEST_SUITE_P(Trainer, EpochAllocations,
+                         ::testing::Values(AllocationCase{"self_supervised", IntegratorLoss::SelfSupervised, false, false},
+                                           AllocationCase{"float32_decoder", IntegratorLoss::SelfSupervised, true, false},
+                                           AllocationCase{"overwrite_dirichlet", IntegratorLoss::SelfSupervised, false, true},
+                                           AllocationCase{"supervised_l2", IntegratorLoss::SupervisedL2, false, false}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+// The counter counts: a matrix made inside the window is seen.
+TEST(HeapCounter, CountsAnEigenMatrix)
+{
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
+    testing::HeapCounter counter;
+    MatrixXd m = MatrixXd::Random(50, 50);
+    EXPECT_GE(counter.count(), 1);
+    EXPECT_NE(m(0, 0), 2.0);
+}
+
+} // namespace
+} // namespace lb
