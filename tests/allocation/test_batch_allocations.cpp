@@ -27,7 +27,7 @@ struct ClothProblem {
 
     ClothProblem()
     {
-        data = testing::simulate_small_scene("cloth", 160);
+        data = testing::simulate_small_scene("cloth", 320);
         model = std::make_unique<PhysicsModel>(data.physics);
         AutoencoderOptions ao;
         ao.latent_dim = default_latent_dim("cloth");
@@ -85,13 +85,13 @@ protected:
 
 // A batch allocates about as many blocks whatever its size: nothing per sample (the batch's
 // matrices, the network passes and the energies' per-thread buffers are made or resized
-// once per batch, never per column). Batches of at most 32 and 128 samples.
+// once per batch, never per column). Batches of at most 64 and 256 samples.
 TEST_P(EpochAllocations, DoNotGrowWithTheBatch)
 {
     if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
     keep_freed_memory();
-    const Count small = allocations_per_batch(32);
-    const Count large = allocations_per_batch(128);
+    const Count small = allocations_per_batch(64);
+    const Count large = allocations_per_batch(256);
     std::printf("[ allocations per batch: %.1f with %.1f samples, %.1f with %.1f ]\n", small.per_batch, small.samples,
                 large.per_batch, large.samples);
     EXPECT_GT(small.per_batch, 0.0);  // the counter sees the trainer's allocations
