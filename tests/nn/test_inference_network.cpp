@@ -2,9 +2,6 @@
 
 #include <omp.h>
 
-#include <atomic>
-#include <cstdlib>
-
 #include "nn/batch_norm.hpp"
 #include "nn/inference_network.hpp"
 #include "nn/linear.hpp"
@@ -13,58 +10,12 @@
 #include "paper/paper_architectures.hpp"
 #include "nn/residual_block.hpp"
 #include "nn_test_support.hpp"
-
-// ---- allocation counter ---------------------------------------------------------------
-// malloc/calloc/realloc are interposed for this test executable (glibc exports the
-// real implementations as __libc_*); Eigen and operator new both end in malloc.
-// AddressSanitizer interposes malloc itself, so under it (scripts/run sanitize) the
-// counter is off and the allocation tests are skipped.
-#if defined(__SANITIZE_ADDRESS__)
-#define LB_COUNT_ALLOCATIONS 0
-#else
-#define LB_COUNT_ALLOCATIONS 1
-#endif
-namespace {
-std::atomic<bool> g_count_allocations{false};
-std::atomic<long> g_allocations{0};
-} // namespace
-
-#if LB_COUNT_ALLOCATIONS
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t n, std::size_t size);
-void* __libc_realloc(void* p, std::size_t size);
-
-void* malloc(std::size_t size)
-{
-    if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-    return __libc_malloc(size);
-}
-void* calloc(std::size_t n, std::size_t size)
-{
-    if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-    return __libc_calloc(n, size);
-}
-void* realloc(void* p, std::size_t size)
-{
-    if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-    return __libc_realloc(p, size);
-}
-}
-#endif
+#include "support/heap_counter.hpp"
 
 namespace lb::nn {
 namespace {
 
-struct AllocationCounter {
-    AllocationCounter()
-    {
-        g_allocations = 0;
-        g_count_allocations = true;
-    }
-    ~AllocationCounter() { g_count_allocations = false; }
-    long count() const { return g_allocations.load(); }
-};
+using testing::HeapCounter;
 
 /// ‖a − b‖∞ / max(‖b‖∞, 1e-30)
 double relative_error(const VectorXd& a, const VectorXd& b)
@@ -74,8 +25,8 @@ double relative_error(const VectorXd& a, const VectorXd& b)
 
 TEST(InferenceNetwork, AllocationCounterSeesAllocations)
 {
-    if (!LB_COUNT_ALLOCATIONS) GTEST_SKIP() << "malloc is AddressSanitizer's in this build";
-    AllocationCounter counter;
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
+    HeapCounter counter;
     VectorXd v = VectorXd::Ones(1000);
     EXPECT_GT(counter.count(), 0) << "malloc interposition is not active, the no-allocation test would be vacuous";
     EXPECT_EQ(v.sum(), 1000.0);
@@ -283,7 +234,7 @@ TEST(InferenceNetwork, BatchedPassesDoNotDependOnTheThreadCount)
 
 TEST(InferenceNetwork, EvaluateAndJacobianRowsDoNotAllocate)
 {
-    if (!LB_COUNT_ALLOCATIONS) GTEST_SKIP() << "malloc is AddressSanitizer's in this build";
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
     Rng rng(85);
     const auto arch = table2_architecture("armadillo");
     Sequential decoder = make_mlp(arch.decoder, rng);
@@ -301,7 +252,7 @@ TEST(InferenceNetwork, EvaluateAndJacobianRowsDoNotAllocate)
     float checksum = 0;
     long allocations = 0;
     {
-        AllocationCounter counter;
+        HeapCounter counter;
         for (int frame = 0; frame < 20; ++frame) {
             integ.evaluate(q.data(), z.data());
             dec.evaluate(z.data(), x.data());

@@ -1,4 +1,4 @@
-#include "allocation/heap_counter.hpp"
+#include "support/heap_counter.hpp"
 
 #include <atomic>
 #include <cerrno>

@@ -1,9 +1,10 @@
 #pragma once
-// Counts the process's heap allocations while switched on: this test executable replaces
+// Counts the process's heap allocations while switched on: the test executable replaces
 // the C library's malloc family (heap_counter.cpp) with versions that count and then call
-// glibc's own allocator. Every C++ `new`, Eigen's aligned allocations and the C library's
-// own callers go through them. Not available under AddressSanitizer (which replaces the
-// same functions) nor outside glibc: heap_counting_available() is then false.
+// glibc's own allocator; every C++ `new` and Eigen's aligned allocations end there. Linked
+// into the test executables listed in LB_HEAP_COUNTED_TESTS (tests/CMakeLists.txt). Not
+// available under AddressSanitizer (which replaces the same functions) nor outside glibc:
+// heap_counting_available() is then false.
 #include <cstddef>
 
 namespace lb::testing {
