@@ -36,7 +36,8 @@ LatentMlpModel LatentMlpModel::create(Index latent_dim, Index param_dim, const s
     return m;
 }
 
-MatrixXd LatentMlpModel::forward(const MatrixXd& inputs_raw, const MatrixXd& z_prev, bool training)
+MatrixXd LatentMlpModel::forward(const Eigen::Ref<const MatrixXd>& inputs_raw, const Eigen::Ref<const MatrixXd>& z_prev,
+                                 bool training)
 {
     const MatrixXd out = network.forward(inputs.apply(inputs_raw), training);
     return z_prev + output_scale.asDiagonal() * out;

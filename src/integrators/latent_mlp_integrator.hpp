@@ -41,7 +41,7 @@ struct LatentMlpModel {
     Index input_dim() const { return 2 * latent_dim + 3 * param_dim; }
     /// Batched forward in double (training), columns are samples.
     /// @param inputs_raw  input_dim × B unstandardised; @param z_prev  latent × B
-    MatrixXd forward(const MatrixXd& inputs_raw, const MatrixXd& z_prev, bool training);
+    MatrixXd forward(const Eigen::Ref<const MatrixXd>& inputs_raw, const Eigen::Ref<const MatrixXd>& z_prev, bool training);
     /// Backward of the last forward: dZ (latent × B) → accumulates parameter gradients.
     /// Returns ∂L/∂inputs_raw (input_dim × B) through the network and the standardiser; the
     /// skip connection's term (∂L/∂z_prev += dZ) is the caller's, as z_prev is passed apart.

@@ -44,11 +44,11 @@ BalancingVelocity balancing_velocity_from_string(const std::string& name)
     throw ConfigError("unknown balancing velocity '" + name + "' (expected mean_velocity or mean_speed)");
 }
 
-VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
-                          double dt, BalancingVelocity velocity)
+void balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2, double dt,
+                      BalancingVelocity velocity, Eigen::Ref<VectorXd> speeds)
 {
     assert(X_prev.rows() == X_prev2.rows() && X_prev.cols() == X_prev2.cols() && X_prev.rows() % 3 == 0);
-    VectorXd speeds(X_prev.cols());
+    assert(speeds.size() == X_prev.cols());
     const Index N = X_prev.rows() / 3;
 #pragma omp parallel for schedule(static) if (X_prev.cols() >= kParallelColumns)
     for (Index i = 0; i < X_prev.cols(); ++i) {
@@ -63,6 +63,13 @@ VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen:
         speeds[i] = velocity == BalancingVelocity::MeanVelocity ? (mean_velocity / double(N) / dt).norm()
                                                                 : mean_speed / double(N) / dt;
     }
+}
+
+VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
+                          double dt, BalancingVelocity velocity)
+{
+    VectorXd speeds(X_prev.cols());
+    balancing_speeds(X_prev, X_prev2, dt, velocity, speeds);
     return speeds;
 }
 
@@ -172,68 +179,75 @@ IntegratorTrainer::IntegratorTrainer(const PhysicsModel& model, Autoencoder& aut
 IntegratorBatch IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::vector<Index>& indices,
                                               Rng& rng) const
 {
+    IntegratorBatch b;
+    make_batch(samples, indices, rng, b);
+    return b;
+}
+
+void IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::vector<Index>& indices, Rng& rng,
+                                   IntegratorBatch& b) const
+{
     const Index n = Index(indices.size());
     const Index copies = m_options.training_noise ? 2 : 1;
-    const Index L = samples.z_prev.rows();
-    IntegratorBatch b;
+    const Index L = samples.z_prev.rows(), P = samples.p.rows();
     b.clean = n;
-    b.source.reserve(size_t(n * copies));
+    b.source.clear();
     for (Index c = 0; c < copies; ++c) b.source.insert(b.source.end(), indices.begin(), indices.end());
-    auto gather = [&](const MatrixXd& src, MatrixXd& dst) {
-        dst.resize(src.rows(), n * copies);
+    auto gather = [&](const MatrixXd& src, auto&& dst) {
         for (Index c = 0; c < copies; ++c) {
             for (Index i = 0; i < n; ++i) dst.col(c * n + i) = src.col(indices[size_t(i)]);
         }
     };
-    gather(samples.z_prev, b.z_prev);
-    gather(samples.z_prev2, b.z_prev2);
-    gather(samples.z_target, b.z_target);
-    gather(samples.targets, b.targets);
-    gather(samples.targets_prev, b.targets_prev);
-    gather(samples.targets_prev2, b.targets_prev2);
-    MatrixXd p, p1, p2;
-    gather(samples.p, p);
-    gather(samples.p_prev, p1);
-    gather(samples.p_prev2, p2);
+    auto gather_into = [&](const MatrixXd& src, nn::GrowingMatrix<double>& dst) {
+        gather(src, dst.resize(src.rows(), n * copies));
+    };
+    gather_into(samples.z_prev, b.m_z_prev);
+    gather_into(samples.z_prev2, b.m_z_prev2);
+    gather_into(samples.z_target, b.m_z_target);
+    gather_into(samples.targets, b.m_targets);
+    gather_into(samples.targets_prev, b.m_targets_prev);
+    gather_into(samples.targets_prev2, b.m_targets_prev2);
+    Eigen::Map<MatrixXd> inputs = b.m_inputs.resize(2 * L + 3 * P, n * copies);
+    gather(samples.p, inputs.middleRows(2 * L, P));
+    gather(samples.p_prev, inputs.middleRows(2 * L + P, P));
+    gather(samples.p_prev2, inputs.middleRows(2 * L + 2 * P, P));
     if (copies == 2) {
         // Uniform noise of noise_fraction × the batch's per-component std on the
         // second copy's input latents; boundary parameters unchanged.
-        for (MatrixXd* z : {&b.z_prev, &b.z_prev2}) {
-            const MatrixXd clean = z->leftCols(n);
-            const VectorXd mean = clean.rowwise().mean();
-            const VectorXd std = ((clean.colwise() - mean).array().square().rowwise().sum() / double(n)).sqrt();
+        for (nn::GrowingMatrix<double>* buffer : {&b.m_z_prev, &b.m_z_prev2}) {
+            Eigen::Map<MatrixXd> z = buffer->view();
+            const auto clean = z.leftCols(n);
+            b.m_mean = clean.rowwise().mean();
+            b.m_std = ((clean.colwise() - b.m_mean).array().square().rowwise().sum() / double(n)).sqrt();
             for (Index i = 0; i < n; ++i) {
                 for (Index c = 0; c < L; ++c) {
-                    (*z)(c, n + i) += m_options.noise_fraction * std[c] * rng.uniform(-1.0, 1.0);
+                    z(c, n + i) += m_options.noise_fraction * b.m_std[c] * rng.uniform(-1.0, 1.0);
                 }
             }
         }
     }
-    b.inputs.resize(2 * L + 3 * p.rows(), n * copies);
-    b.inputs << b.z_prev, b.z_prev2, p, p1, p2;
-    return b;
+    inputs.topRows(L) = b.z_prev();
+    inputs.middleRows(L, L) = b.z_prev2();
 }
 
 double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient)
 {
     const Index B = batch.size();
-    const MatrixXd Zt = model.forward(batch.inputs, batch.z_prev, with_gradient);
+    const MatrixXd Zt = model.forward(batch.inputs(), batch.z_prev(), with_gradient);
     if (m_options.loss == IntegratorLoss::SupervisedL2) {
-        const MatrixXd diff = Zt - batch.z_target;
+        const MatrixXd diff = Zt - batch.z_target();
         if (with_gradient) model.backward(2.0 * diff / double(B));
         return diff.squaredNorm() / double(B);
     }
 
     // Self-supervised: the incremental potential of the decoded prediction, each sample
     // weighted by data balancing, averaged over the batch.
-    MatrixXd X_tilde;
-    VectorXd speeds;
-    step_inputs(batch, X_tilde, speeds);
+    step_inputs(batch);
     LatentEnergyOptions options;
     options.gradient = with_gradient;
-    options.weights = m_options.data_balancing ? weights_of(speeds) : VectorXd::Ones(B);
+    options.weights = m_options.data_balancing ? weights_of(m_speeds.view().col(0)) : VectorXd::Ones(B);
     options.normalization = double(B);
-    const LatentEnergies e = m_potential.evaluate_tilde(Zt, batch.targets, X_tilde, options);
+    const LatentEnergies e = m_potential.evaluate_tilde(Zt, batch.targets(), m_x_tilde.view(), options);
     if (with_gradient) model.backward(e.grad_z);
     return e.objective;
 }
@@ -246,13 +260,13 @@ void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
     m_cached_speeds = balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity);
 }
 
-void IntegratorTrainer::step_inputs(const IntegratorBatch& batch, MatrixXd& X_tilde, VectorXd& speeds)
+void IntegratorTrainer::step_inputs(const IntegratorBatch& batch)
 {
     const Index B = batch.size();
     const bool from_cache = m_cached_tilde.size() != 0 && batch.source.size() == size_t(B);
     const Index clean = from_cache ? batch.clean : 0;
-    X_tilde.resize(m_model.num_dofs(), B);
-    speeds.resize(m_options.data_balancing ? B : 0);
+    Eigen::Map<MatrixXd> X_tilde = m_x_tilde.resize(m_model.num_dofs(), B);
+    auto speeds = m_speeds.resize(m_options.data_balancing ? B : 0, 1).col(0);
 #pragma omp parallel for schedule(static) if (clean >= kParallelColumns)
     for (Index i = 0; i < clean; ++i) {
         X_tilde.col(i) = m_cached_tilde.col(batch.source[size_t(i)]);
@@ -262,11 +276,13 @@ void IntegratorTrainer::step_inputs(const IntegratorBatch& batch, MatrixXd& X_ti
     if (decoded == 0) return;
     // One decoder pass per step, not one over both: the GEMMs' column blocks (and with them
     // the round-off of the columns at a block's edge) stay those the published fits had.
-    const MatrixXd X1 = m_potential.decode(batch.z_prev.rightCols(decoded), batch.targets_prev.rightCols(decoded));
-    const MatrixXd X2 = m_potential.decode(batch.z_prev2.rightCols(decoded), batch.targets_prev2.rightCols(decoded));
+    Eigen::Map<MatrixXd> X1 = m_x_prev.resize(m_model.num_dofs(), decoded);
+    Eigen::Map<MatrixXd> X2 = m_x_prev2.resize(m_model.num_dofs(), decoded);
+    m_potential.decode(batch.z_prev().rightCols(decoded), batch.targets_prev().rightCols(decoded), X1);
+    m_potential.decode(batch.z_prev2().rightCols(decoded), batch.targets_prev2().rightCols(decoded), X2);
     X_tilde.rightCols(decoded) = inertial_target(X1, X2);
     if (speeds.size() != 0)
-        speeds.tail(decoded) = balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity);
+        balancing_speeds(X1, X2, m_model.dt(), m_options.balancing_velocity, speeds.tail(decoded));
 }
 
 double IntegratorTrainer::loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch)
@@ -291,7 +307,7 @@ VectorXd IntegratorTrainer::balancing_weights(const Eigen::Ref<const MatrixXd>& 
     return weights_of(balancing_speeds(X_prev, X_prev2, m_model.dt(), m_options.balancing_velocity));
 }
 
-VectorXd IntegratorTrainer::weights_of(const VectorXd& speeds) const
+VectorXd IntegratorTrainer::weights_of(const Eigen::Ref<const VectorXd>& speeds) const
 {
     return speeds.unaryExpr([&](double v) { return 1.0 / std::max(v, m_velocity_floor); });
 }
@@ -319,13 +335,15 @@ public:
     std::vector<nn::ParameterRef> parameters() override { return m_model.network.parameters("integrator."); }
     double loss_and_gradient(const std::vector<Index>& indices, Rng& rng) override
     {
-        return m_trainer.loss_and_gradient(m_model, m_trainer.make_batch(m_samples, indices, rng));
+        m_trainer.make_batch(m_samples, indices, rng, m_batch);
+        return m_trainer.loss_and_gradient(m_model, m_batch);
     }
 
 private:
     IntegratorTrainer& m_trainer;
     LatentMlpModel& m_model;
     const TrainingSamples& m_samples;
+    IntegratorBatch m_batch;  ///< refilled every batch (its storage only grows)
 };
 
 } // namespace

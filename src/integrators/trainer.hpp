@@ -38,6 +38,7 @@
 
 #include "integrators/latent_mlp_integrator.hpp"
 #include "nn/training_loop.hpp"
+#include "nn/workspace.hpp"
 #include "latent/latent_potential.hpp"
 #include "sim/physics_model.hpp"
 
@@ -58,6 +59,9 @@ BalancingVelocity balancing_velocity_from_string(const std::string& name);
 /// @return S speeds (m/s)
 VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
                           double dt, BalancingVelocity velocity);
+/// The same into `speeds` (S, sized by the caller).
+void balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2, double dt,
+                      BalancingVelocity velocity, Eigen::Ref<VectorXd> speeds);
 
 struct IntegratorTrainOptions : nn::TrainingRunOptions {
     IntegratorLoss loss = IntegratorLoss::SelfSupervised;
@@ -105,14 +109,27 @@ TrainingSamples make_training_samples(Autoencoder& ae, const Dataset& data, cons
 /// per-component standard deviation of z_t − z_{t−1}, 1 where it vanishes).
 void fit_input_statistics(LatentMlpModel& model, const TrainingSamples& samples);
 
-/// A mini-batch, after noise was (optionally) added.
-struct IntegratorBatch {
+/// A mini-batch, after noise was (optionally) added. Its matrices are views of storage that
+/// only grows: refilling one batch (IntegratorTrainer::make_batch into it) allocates nothing
+/// once it has held the largest batch. Views are valid until the next refill.
+class IntegratorBatch {
+public:
     std::vector<Index> source;  ///< sample index of each column
     Index clean = 0;            ///< columns [0, clean) carry unperturbed ground-truth latents
-    MatrixXd inputs;  ///< input_dim × B (unstandardised)
-    MatrixXd z_prev, z_prev2, z_target;
-    MatrixXd targets, targets_prev, targets_prev2;
-    Index size() const { return z_prev.cols(); }
+    Index size() const { return Index(source.size()); }
+    /// input_dim × B (unstandardised): z_{t−1}, z_{t−2}, p_t, p_{t−1}, p_{t−2} stacked.
+    Eigen::Map<const MatrixXd> inputs() const { return m_inputs.view(); }
+    Eigen::Map<const MatrixXd> z_prev() const { return m_z_prev.view(); }  ///< latent × B
+    Eigen::Map<const MatrixXd> z_prev2() const { return m_z_prev2.view(); }
+    Eigen::Map<const MatrixXd> z_target() const { return m_z_target.view(); }
+    Eigen::Map<const MatrixXd> targets() const { return m_targets.view(); }  ///< 3B × B Dirichlet targets
+    Eigen::Map<const MatrixXd> targets_prev() const { return m_targets_prev.view(); }
+    Eigen::Map<const MatrixXd> targets_prev2() const { return m_targets_prev2.view(); }
+
+private:
+    friend class IntegratorTrainer;
+    nn::GrowingMatrix<double> m_inputs, m_z_prev, m_z_prev2, m_z_target, m_targets, m_targets_prev, m_targets_prev2;
+    VectorXd m_mean, m_std;  ///< the noise's per-component statistics (latent)
 };
 
 /// What a training run did (epochs, final loss, resumed, time-limited, why a checkpoint
@@ -125,6 +142,9 @@ public:
 
     /// Gather samples `indices`, doubled with noisy copies if training_noise.
     IntegratorBatch make_batch(const TrainingSamples& samples, const std::vector<Index>& indices, Rng& rng) const;
+    /// The same into `batch`, reusing its storage.
+    void make_batch(const TrainingSamples& samples, const std::vector<Index>& indices, Rng& rng,
+                    IntegratorBatch& batch) const;
     /// Loss of the batch; accumulates its parameter gradients into the model (the
     /// caller zeroes them). Network in training mode.
     double loss_and_gradient(LatentMlpModel& model, const IntegratorBatch& batch);
@@ -166,9 +186,10 @@ private:
     double evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient);
     /// The batch columns' x̃ (3N × B) and, with data balancing, |v_{t−1}| (B): the clean
     /// columns from the cache, the noisy copies' input latents decoded.
-    void step_inputs(const IntegratorBatch& batch, MatrixXd& X_tilde, VectorXd& speeds);
+    /// Into m_x_tilde and m_speeds.
+    void step_inputs(const IntegratorBatch& batch);
     /// 1 / max(|v_{t−1}|, v_floor) of every speed.
-    VectorXd weights_of(const VectorXd& speeds) const;
+    VectorXd weights_of(const Eigen::Ref<const VectorXd>& speeds) const;
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
@@ -177,6 +198,9 @@ private:
     double m_velocity_floor = 1e-6;
     MatrixXd m_cached_tilde;   ///< x̃ of every sample, 3N × S (empty: decode every batch)
     VectorXd m_cached_speeds;  ///< |v_{t−1}| of every sample (S)
+    /// Batch workspaces that only grow: step_inputs' x̃ (3N × B) and speeds (B × 1), and the
+    /// noisy columns' decoded x_{t−1}, x_{t−2}.
+    nn::GrowingMatrix<double> m_x_tilde, m_speeds, m_x_prev, m_x_prev2;
 };
 
 } // namespace lb

@@ -166,43 +166,57 @@ void BcRelativeEncoding::to_positions_into(const Eigen::Ref<const Eigen::VectorX
 }
 
 template <typename Scalar>
-MatrixXd BcRelativeEncoding::positions_of_columns(const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& F,
-                                                  const MatrixXd& targets) const
+void BcRelativeEncoding::positions_of_columns(
+    const Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>>& F,
+    const Eigen::Ref<const MatrixXd>& targets, Eigen::Ref<MatrixXd> X) const
 {
     const Index B = static_cast<Index>(m_bc_indices.size());
-    if (F.rows() != m_num_features || targets.rows() != 3 * B || targets.cols() != F.cols())
+    if (F.rows() != m_num_features || targets.rows() != 3 * B || targets.cols() != F.cols() ||
+        X.rows() != m_num_dofs || X.cols() != F.cols())
         throw std::invalid_argument("BcRelativeEncoding::to_positions: expected " + std::to_string(m_num_features) +
-                                    " × S features and " + std::to_string(3 * B) + " × S targets, got " +
-                                    std::to_string(F.rows()) + " × " + std::to_string(F.cols()) + " and " +
-                                    std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
-    MatrixXd X(m_num_dofs, F.cols());
+                                    " × S features, " + std::to_string(3 * B) + " × S targets and " +
+                                    std::to_string(m_num_dofs) + " × S positions, got " + std::to_string(F.rows()) +
+                                    " × " + std::to_string(F.cols()) + ", " + std::to_string(targets.rows()) + " × " +
+                                    std::to_string(targets.cols()) + " and " + std::to_string(X.rows()) + " × " +
+                                    std::to_string(X.cols()));
     // Columns are independent: parallel over a training batch, serial for a rollout's one frame.
 #pragma omp parallel for schedule(static) if (F.cols() >= kParallelColumns)
     for (Index s = 0; s < F.cols(); ++s) positions_of_frame(F.col(s).data(), targets.col(s).data(), X.col(s).data());
+}
+
+MatrixXd BcRelativeEncoding::to_positions(const Eigen::Ref<const MatrixXd>& F,
+                                          const Eigen::Ref<const MatrixXd>& targets) const
+{
+    MatrixXd X(m_num_dofs, F.cols());
+    positions_of_columns<double>(F, targets, X);
     return X;
 }
 
-MatrixXd BcRelativeEncoding::to_positions(const MatrixXd& F, const MatrixXd& targets) const
+void BcRelativeEncoding::to_positions(const Eigen::Ref<const MatrixXd>& F, const Eigen::Ref<const MatrixXd>& targets,
+                                      Eigen::Ref<MatrixXd> X) const
 {
-    return positions_of_columns(F, targets);
+    positions_of_columns<double>(F, targets, X);
 }
 
-MatrixXd BcRelativeEncoding::to_positions_from_float(const Eigen::MatrixXf& F, const MatrixXd& targets) const
+void BcRelativeEncoding::to_positions(const Eigen::Ref<const Eigen::MatrixXf>& F,
+                                      const Eigen::Ref<const MatrixXd>& targets, Eigen::Ref<MatrixXd> X) const
 {
-    return positions_of_columns(F, targets);
+    positions_of_columns<float>(F, targets, X);
 }
 
 template <typename Scalar>
-void BcRelativeEncoding::gradient_into(const MatrixXd& grad_x, const MatrixXd& targets,
-                                       Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& G) const
+void BcRelativeEncoding::gradient_into(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& targets,
+                                       Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> G) const
 {
     const Index B = static_cast<Index>(m_bc_indices.size());
-    if (grad_x.rows() != m_num_dofs || targets.rows() != 3 * B || targets.cols() != grad_x.cols())
+    if (grad_x.rows() != m_num_dofs || targets.rows() != 3 * B || targets.cols() != grad_x.cols() ||
+        G.rows() != m_num_features || G.cols() != grad_x.cols())
         throw std::invalid_argument("BcRelativeEncoding::gradient_to_features: expected " + std::to_string(m_num_dofs) +
-                                    " × S gradients and " + std::to_string(3 * B) + " × S targets, got " +
-                                    std::to_string(grad_x.rows()) + " × " + std::to_string(grad_x.cols()) + " and " +
-                                    std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()));
-    G.resize(m_num_features, grad_x.cols());
+                                    " × S gradients, " + std::to_string(3 * B) + " × S targets and " +
+                                    std::to_string(m_num_features) + " × S features, got " +
+                                    std::to_string(grad_x.rows()) + " × " + std::to_string(grad_x.cols()) + ", " +
+                                    std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()) + " and " +
+                                    std::to_string(G.rows()) + " × " + std::to_string(G.cols()));
     const bool identity = !m_rod_relative && m_frame == EncodingFrame::translation;  // P = I
 #pragma omp parallel for schedule(static) if (grad_x.cols() >= kParallelColumns)
     for (Index s = 0; s < grad_x.cols(); ++s) {
@@ -222,16 +236,25 @@ void BcRelativeEncoding::gradient_into(const MatrixXd& grad_x, const MatrixXd& t
     }
 }
 
-MatrixXd BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const
+MatrixXd BcRelativeEncoding::gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x,
+                                                  const Eigen::Ref<const MatrixXd>& targets) const
 {
-    MatrixXd G;
-    gradient_into(grad_x, targets, G);
+    MatrixXd G(m_num_features, grad_x.cols());
+    gradient_into<double>(grad_x, targets, G);
     return G;
 }
 
-void BcRelativeEncoding::gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets, Eigen::MatrixXf& G) const
+void BcRelativeEncoding::gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x,
+                                              const Eigen::Ref<const MatrixXd>& targets, Eigen::Ref<MatrixXd> G) const
 {
-    gradient_into(grad_x, targets, G);
+    gradient_into<double>(grad_x, targets, G);
+}
+
+void BcRelativeEncoding::gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x,
+                                              const Eigen::Ref<const MatrixXd>& targets,
+                                              Eigen::Ref<Eigen::MatrixXf> G) const
+{
+    gradient_into<float>(grad_x, targets, G);
 }
 
 } // namespace lb

@@ -52,10 +52,14 @@ public:
     /// @param F        F × S features
     /// @param targets  3B × S Dirichlet targets (xyz interleaved, one column per frame)
     /// @return 3N × S positions
-    MatrixXd to_positions(const MatrixXd& F, const MatrixXd& targets) const;
-    /// The same from single-precision features (the float32 decoder's output), each
-    /// feature widened exactly: the positions equal those of F.cast<double>().
-    MatrixXd to_positions_from_float(const Eigen::MatrixXf& F, const MatrixXd& targets) const;
+    MatrixXd to_positions(const Eigen::Ref<const MatrixXd>& F, const Eigen::Ref<const MatrixXd>& targets) const;
+    /// The same into X (3N × S, shaped by the caller; no allocation), from double or
+    /// single-precision features (the float32 decoder's output), each feature widened
+    /// exactly: the positions equal those of F.cast<double>().
+    void to_positions(const Eigen::Ref<const MatrixXd>& F, const Eigen::Ref<const MatrixXd>& targets,
+                      Eigen::Ref<MatrixXd> X) const;
+    void to_positions(const Eigen::Ref<const Eigen::MatrixXf>& F, const Eigen::Ref<const MatrixXd>& targets,
+                      Eigen::Ref<MatrixXd> X) const;
     /// One frame without allocation (the inference path): x (3N) from features f (F,
     /// float or double) and the Dirichlet targets (3B).
     void to_positions_into(const Eigen::Ref<const VectorXd>& f, const Eigen::Ref<const VectorXd>& targets,
@@ -64,10 +68,13 @@ public:
                            Eigen::Ref<VectorXd> x) const;
     /// Chain rule through to_positions at the same targets (3B × S; the rigid frame's
     /// R depends on them): 3N × S position gradients → F × S.
-    MatrixXd gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets) const;
-    /// The same rounded to single precision into G (the float32 decoder's VJP input):
-    /// equal to gradient_to_features(grad_x, targets).cast<float>(), without the double copy.
-    void gradient_to_features(const MatrixXd& grad_x, const MatrixXd& targets, Eigen::MatrixXf& G) const;
+    MatrixXd gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& targets) const;
+    /// The same into G (F × S, shaped by the caller; no allocation), in double or rounded
+    /// to single precision (the float32 decoder's VJP input).
+    void gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& targets,
+                              Eigen::Ref<MatrixXd> G) const;
+    void gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& targets,
+                              Eigen::Ref<Eigen::MatrixXf> G) const;
     /// The rigid frame's rotation for the Dirichlet positions `p` (3B, xyz interleaved);
     /// the identity in the translation frame.
     Matrix3d frame_rotation(const double* p) const;
@@ -76,12 +83,12 @@ private:
     template <typename Scalar>
     void positions_of_frame(const Scalar* f, const double* targets, double* x) const;
     template <typename Scalar>
-    MatrixXd positions_of_columns(const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& F,
-                                  const MatrixXd& targets) const;
+    void positions_of_columns(const Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>>& F,
+                              const Eigen::Ref<const MatrixXd>& targets, Eigen::Ref<MatrixXd> X) const;
     /// gradient_to_features into G of either precision; shapes checked.
     template <typename Scalar>
-    void gradient_into(const MatrixXd& grad_x, const MatrixXd& targets,
-                       Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& G) const;
+    void gradient_into(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& targets,
+                       Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> G) const;
 
     /// Mean of the Dirichlet vertices of one 3N position vector.
     Vector3d bc_mean(const Eigen::Ref<const VectorXd>& x) const;

@@ -75,7 +75,8 @@ MatrixXd LatentPotential::checked_x_tilde(const char* caller, Index B, const Eig
     return inertial_target(X_prev, X_prev2);
 }
 
-LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
+LatentEnergies LatentPotential::evaluate_columns(const Eigen::Ref<const MatrixXd>& Z,
+                                                 const Eigen::Ref<const MatrixXd>& bc_targets,
                                                  const Eigen::Ref<const MatrixXd>& X_tilde,
                                                  const LatentEnergyOptions& options, bool check_finite)
 {
@@ -89,23 +90,24 @@ LatentEnergies LatentPotential::evaluate_columns(const MatrixXd& Z, const Matrix
                     std::to_string(m_autoencoder.latent_dim()) + ", " + std::to_string(n_targets) + " and " +
                     std::to_string(n_dofs) + " rows, as many columns, 0 or " + std::to_string(B) + " weights");
     LatentEnergies out;
-    MatrixXd X;
-    if (decoder_frozen()) {
-        X = frozen_positions(Z, bc_targets, options.gradient);
-    } else {
-        X = positions_of(m_autoencoder.decode_features(Z), bc_targets);
-    }
+    Eigen::Map<MatrixXd> X = m_decoded.resize(n_dofs, B);
+    if (decoder_frozen())
+        frozen_positions(Z, bc_targets, options.gradient, X);
+    else
+        positions_of(m_autoencoder.decode_features(Z), bc_targets, X);
     energies_of(X, bc_targets, X_tilde, options, check_finite, out);
     if (options.gradient) {
         if (m_overwrite_dirichlet) {  // x_B = x*_B does not depend on z
             for (int v : m_model.bc_indices()) out.grad_x.middleRows<3>(3 * Index(v)).setZero();
         }
-        if (decoder_frozen())
+        if (decoder_frozen()) {
+            out.grad_z.resize(Z.rows(), B);
             frozen_vjp(out.grad_x, bc_targets, out.grad_z);
-        else
+        } else {
             out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x, bc_targets);
+        }
     }
-    if (options.decoded) out.X = std::move(X);
+    if (options.decoded) out.X = X;
     return out;
 }
 
@@ -253,48 +255,57 @@ void LatentPotential::freeze_decoder(bool float32)
         m_frozen = std::make_unique<nn::InferenceNetworkD>(m_autoencoder.decoder());
 }
 
-MatrixXd LatentPotential::frozen_positions(const MatrixXd& Z, const MatrixXd& bc_targets, bool record)
+void LatentPotential::frozen_positions(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                       bool record, Eigen::Ref<MatrixXd> X)
 {
     if (m_frozen) {
-        m_frozen->forward_batch(Z, m_features, record);
-        return positions_of(m_features, bc_targets);
+        positions_of(m_frozen->forward_batch(Z, record), bc_targets, X);
+        return;
     }
-    m_float_in = Z.cast<float>();
-    m_frozen_float->forward_batch(m_float_in, m_float_out, record);
-    return positions_of(m_float_out, bc_targets);
+    auto Zf = m_float_in.resize(Z.rows(), Z.cols());
+    Zf = Z.cast<float>();
+    positions_of(m_frozen_float->forward_batch(Zf, record), bc_targets, X);
 }
 
-void LatentPotential::frozen_vjp(const MatrixXd& grad_x, const MatrixXd& bc_targets, MatrixXd& grad_z)
+void LatentPotential::frozen_vjp(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                 Eigen::Ref<MatrixXd> grad_z)
 {
     const BcRelativeEncoding& encoding = m_autoencoder.encoding();
     if (m_frozen) {
-        m_frozen->vjp_batch(encoding.gradient_to_features(grad_x, bc_targets), grad_z);
+        auto G = m_feature_grad.resize(encoding.num_features(), grad_x.cols());
+        encoding.gradient_to_features(grad_x, bc_targets, G);
+        grad_z = m_frozen->vjp_batch(G);
         return;
     }
-    encoding.gradient_to_features(grad_x, bc_targets, m_float_in);
-    m_frozen_float->vjp_batch(m_float_in, m_float_out);
-    grad_z = m_float_out.cast<double>();
+    auto G = m_float_in.resize(encoding.num_features(), grad_x.cols());
+    encoding.gradient_to_features(grad_x, bc_targets, G);
+    grad_z = m_frozen_float->vjp_batch(G).cast<double>();
 }
 
-MatrixXd LatentPotential::decode(const MatrixXd& Z, const MatrixXd& bc_targets)
+MatrixXd LatentPotential::decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets)
 {
-    if (!decoder_frozen()) return positions_of(m_autoencoder.decode_features(Z), bc_targets);
-    return frozen_positions(Z, bc_targets, false);
+    MatrixXd X(m_model.num_dofs(), Z.cols());
+    decode(Z, bc_targets, X);
+    return X;
+}
+
+void LatentPotential::decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                             Eigen::Ref<MatrixXd> X)
+{
+    if (decoder_frozen())
+        frozen_positions(Z, bc_targets, false, X);
+    else
+        positions_of(m_autoencoder.decode_features(Z), bc_targets, X);
 }
 
 template <typename Features>
-MatrixXd LatentPotential::positions_of(const Features& features, const MatrixXd& bc_targets) const
+void LatentPotential::positions_of(const Features& features, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                   Eigen::Ref<MatrixXd> X) const
 {
-    const BcRelativeEncoding& encoding = m_autoencoder.encoding();
-    MatrixXd X;
-    if constexpr (std::is_same_v<typename Features::Scalar, float>)
-        X = encoding.to_positions_from_float(features, bc_targets);
-    else
-        X = encoding.to_positions(features, bc_targets);
+    m_autoencoder.encoding().to_positions(features, bc_targets, X);
     if (m_overwrite_dirichlet) {
         for (Index i = 0; i < X.cols(); ++i) overwrite_dirichlet(m_model.bc_indices(), bc_targets.col(i), X.col(i));
     }
-    return X;
 }
 
 } // namespace lb

@@ -109,7 +109,11 @@ public:
     bool decoder_float32() const { return m_frozen_float != nullptr; }
     /// D(z) for latent × B codes and 3B × B targets: the frozen copy if any, else the
     /// autoencoder's decode(); Dirichlet vertices overwritten if overwrites_dirichlet().
-    MatrixXd decode(const MatrixXd& Z, const MatrixXd& bc_targets);
+    MatrixXd decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets);
+    /// The same into X (3N × B, shaped by the caller): with a frozen decoder, no allocation
+    /// once its buffers have grown to the batch.
+    void decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                Eigen::Ref<MatrixXd> X);
 
     /// The incremental potentials of B given position vectors (no decoding) and, if
     /// options.gradient, their weighted x-gradients LatentEnergies::grad_x (grad_z stays
@@ -139,19 +143,23 @@ private:
     MatrixXd checked_x_tilde(const char* caller, Index B, const Eigen::Ref<const MatrixXd>& X_prev,
                              const Eigen::Ref<const MatrixXd>& X_prev2) const;
     /// evaluate_tilde(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
-    LatentEnergies evaluate_columns(const MatrixXd& Z, const MatrixXd& bc_targets,
+    LatentEnergies evaluate_columns(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
                                     const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options,
                                     bool check_finite);
 
     /// decode()'s positions of the features the (frozen or live) decoder gave, double or
     /// float: the encoding's, with the Dirichlet vertices overwritten if asked for.
     template <typename Features>
-    MatrixXd positions_of(const Features& features, const MatrixXd& bc_targets) const;
+    void positions_of(const Features& features, const Eigen::Ref<const MatrixXd>& bc_targets,
+                      Eigen::Ref<MatrixXd> X) const;
     /// The frozen copy's forward to positions (`record` keeps its tape for frozen_vjp), and
     /// the vector-Jacobian product of position gradients back to latents, in its precision
     /// (the float copy takes its features and gives its VJP input without a double copy).
-    MatrixXd frozen_positions(const MatrixXd& Z, const MatrixXd& bc_targets, bool record);
-    void frozen_vjp(const MatrixXd& grad_x, const MatrixXd& bc_targets, MatrixXd& grad_z);
+    /// Outputs shaped by the caller (X 3N × B, grad_z latent × B).
+    void frozen_positions(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                          bool record, Eigen::Ref<MatrixXd> X);
+    void frozen_vjp(const Eigen::Ref<const MatrixXd>& grad_x, const Eigen::Ref<const MatrixXd>& bc_targets,
+                    Eigen::Ref<MatrixXd> grad_z);
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
@@ -172,8 +180,10 @@ private:
     std::vector<ColumnWorkspace> m_columns;
     std::unique_ptr<nn::InferenceNetworkD> m_frozen;       ///< freeze_decoder()'s compiled decoder
     std::unique_ptr<nn::InferenceNetwork> m_frozen_float;  ///< or its single-precision copy
-    MatrixXd m_features;                                   ///< its output workspace
-    Eigen::MatrixXf m_float_in, m_float_out;               ///< the float copy's conversions
+    // Batch workspaces that only grow: evaluate's decoded positions, the double copy's VJP
+    // input, the float copy's input (latents, then VJP seeds).
+    nn::GrowingMatrix<double> m_decoded, m_feature_grad;
+    nn::GrowingMatrix<float> m_float_in;
 };
 
 } // namespace lb

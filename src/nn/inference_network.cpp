@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include <omp.h>
 
@@ -619,7 +620,8 @@ Index block_start(int block, int blocks, Index columns)
 } // namespace
 
 template <typename S>
-void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, Matrix& Y, bool record)
+Eigen::Map<const typename BasicInferenceNetwork<S>::Matrix>
+BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, bool record)
 {
     if (X.rows() != m_in)
         throw std::invalid_argument("InferenceNetwork::forward_batch: expected " + std::to_string(m_in) +
@@ -627,25 +629,24 @@ void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, 
     const Index B = X.cols();
     m_batch.resize(m_buffers.size());
     m_batch_derivative.resize(m_ops.size());
-    m_batch[0] = X;
+    m_batch[0].resize(m_in, B) = X;
     for (std::size_t b = 1; b < m_batch.size(); ++b) m_batch[b].resize(m_buffer_size[b], B);
     for (std::size_t i = 0; i < m_ops.size(); ++i) {
         if (record && m_ops[i].act != ActivationKind::identity) m_batch_derivative[i].resize(m_ops[i].out, B);
     }
     const int blocks = column_blocks(B);
+    if (m_gemm.size() < std::size_t(blocks)) m_gemm.resize(std::size_t(blocks));
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
     for (int block = 0; block < blocks; ++block) {
         const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
+        GemmWorkspace<S>& ws = m_gemm[std::size_t(block)];
         for (std::size_t i = 0; i < m_ops.size(); ++i) {
             const Op& op = m_ops[i];
-            const auto src = m_batch[static_cast<std::size_t>(op.src)].middleCols(c0, n);
-            auto dst = m_batch[static_cast<std::size_t>(op.dst)].middleCols(c0, n);
+            const auto src = m_batch[static_cast<std::size_t>(op.src)].view().middleCols(c0, n);
+            auto dst = m_batch[static_cast<std::size_t>(op.dst)].view().middleCols(c0, n);
             switch (op.kind) {
             case Op::Kind::affine:
-                if (op.accumulate)
-                    dst.noalias() += op.W * src;
-                else
-                    dst.noalias() = op.W * src;
+                gemm<S>(op.W, false, src, dst, op.accumulate ? GemmOp::add : GemmOp::assign, ws);
                 dst.colwise() += op.b.head(op.out);
                 break;
             case Op::Kind::scale: dst = (src.array().colwise() * op.b.array()).colwise() + op.t.array(); break;
@@ -655,18 +656,19 @@ void BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, 
             if (op.act != ActivationKind::identity) {
                 auto a = dst.array();
                 if (record)
-                    activate_with_derivative(op.act, a, m_batch_derivative[i].middleCols(c0, n).array());
+                    activate_with_derivative(op.act, a, m_batch_derivative[i].view().middleCols(c0, n).array());
                 else
                     apply_activation(op.act, a);
             }
         }
     }
-    Y.swap(m_batch[static_cast<std::size_t>(m_output)]);
     m_batch_columns = record ? B : -1;
+    return std::as_const(m_batch[static_cast<std::size_t>(m_output)]).view();
 }
 
 template <typename S>
-void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Matrix& dX)
+Eigen::Map<const typename BasicInferenceNetwork<S>::Matrix>
+BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY)
 {
     const Index B = dY.cols();
     if (m_batch_columns != B || dY.rows() != m_out)
@@ -680,27 +682,29 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
     const bool direct = output_is_plain_affine();
     if (direct) --end;
     const int blocks = column_blocks(B);
+    if (m_gemm.size() < std::size_t(blocks)) m_gemm.resize(std::size_t(blocks));
 #pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
     for (int block = 0; block < blocks; ++block) {
         const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
+        GemmWorkspace<S>& ws = m_gemm[std::size_t(block)];
+        auto adjoint = [&](int buffer) { return m_batch_adjoint[static_cast<std::size_t>(buffer)].view().middleCols(c0, n); };
         // Zeroed for accumulation, except the output's when the output layer reads dY.
         for (std::size_t b = 0; b < m_batch_adjoint.size(); ++b) {
-            if (!(direct && int(b) == m_output)) m_batch_adjoint[b].middleCols(c0, n).setZero();
+            if (!(direct && int(b) == m_output)) adjoint(int(b)).setZero();
         }
         if (direct)
-            m_batch_adjoint[static_cast<std::size_t>(last.src)].middleCols(c0, n).noalias() +=
-                last.W.transpose() * dY.middleCols(c0, n);
+            gemm<S>(last.W, true, dY.middleCols(c0, n), adjoint(last.src), GemmOp::add, ws);
         else
-            m_batch_adjoint[static_cast<std::size_t>(m_output)].middleCols(c0, n) = dY.middleCols(c0, n);
+            adjoint(m_output) = dY.middleCols(c0, n);
         for (std::size_t i = end; i-- > 0;) {
             const Op& op = m_ops[i];
-            auto a_dst = m_batch_adjoint[static_cast<std::size_t>(op.dst)].middleCols(c0, n);
-            auto a_src = m_batch_adjoint[static_cast<std::size_t>(op.src)].middleCols(c0, n);
+            auto a_dst = adjoint(op.dst);
+            auto a_src = adjoint(op.src);
             if (op.act != ActivationKind::identity)
-                a_dst.array() *= m_batch_derivative[i].middleCols(c0, n).array();
+                a_dst.array() *= m_batch_derivative[i].view().middleCols(c0, n).array();
             switch (op.kind) {
             case Op::Kind::affine:
-                a_src.noalias() += op.W.transpose() * a_dst;
+                gemm<S>(op.W, true, a_dst, a_src, GemmOp::add, ws);
                 if (!op.accumulate) a_dst.setZero();
                 break;
             case Op::Kind::scale:
@@ -715,7 +719,7 @@ void BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY, Mat
             }
         }
     }
-    dX.swap(m_batch_adjoint[0]);
+    return std::as_const(m_batch_adjoint[0]).view();
 }
 
 template <typename S>

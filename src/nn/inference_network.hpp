@@ -39,6 +39,7 @@
 #include "nn/network_derivatives.hpp"
 #include "nn/sequential.hpp"
 #include "nn/standardizer.hpp"
+#include "nn/workspace.hpp"
 
 namespace lb::nn {
 
@@ -73,15 +74,17 @@ public:
     void jacobian_rows(const Eigen::Ref<const Vector>& x, const std::vector<Index>& rows, Eigen::Ref<Matrix> J,
                        JacobianMode mode = JacobianMode::automatic);
 
-    /// Batched evaluation (columns are samples) with the same fused ops, one Eigen GEMM
-    /// per affine op: for the frozen decoder of a training loss, where every batch is
-    /// decoded and then differentiated. With `record`, the pre-activations are kept for
-    /// vjp_batch(). Y is resized; its storage is swapped with an internal buffer (no
-    /// copy), so pass the same matrix every time to avoid allocation.
-    void forward_batch(const Eigen::Ref<const Matrix>& X, Matrix& Y, bool record = false);
-    /// dX = Jᵀ dY for every column at the points of the last forward_batch(record = true):
-    /// one reverse pass, one GEMM per affine op. dY out × B, dX in × B (resized).
-    void vjp_batch(const Eigen::Ref<const Matrix>& dY, Matrix& dX);
+    /// Batched evaluation (columns are samples) with the same fused ops, one GEMM per
+    /// affine op: for the frozen decoder of a training loss, where every batch is decoded
+    /// and then differentiated. With `record`, the pre-activations are kept for
+    /// vjp_batch(). Returns out × B, a view of an internal buffer valid until the next
+    /// batched call. The buffers and the GEMMs' packing space only grow: once they have
+    /// seen the largest batch, nothing is allocated.
+    Eigen::Map<const Matrix> forward_batch(const Eigen::Ref<const Matrix>& X, bool record = false);
+    /// Jᵀ dY for every column at the points of the last forward_batch(record = true): one
+    /// reverse pass, one GEMM per affine op. dY out × B; returns in × B, a view valid until
+    /// the next batched call. No allocation once grown, as forward_batch.
+    Eigen::Map<const Matrix> vjp_batch(const Eigen::Ref<const Matrix>& dY);
 
     /// Multiply-adds of one evaluate() (weights touched once each).
     long long multiply_adds() const;
@@ -129,8 +132,10 @@ private:
     Matrix m_rows_weight;
 
     // batched workspaces: per buffer (logical size × B), and per op with an activation its
-    // derivative at the recorded forward's pre-activations (the tape)
-    std::vector<Matrix> m_batch, m_batch_derivative, m_batch_adjoint;
+    // derivative at the recorded forward's pre-activations (the tape); per column block the
+    // GEMMs' packing buffers
+    std::vector<GrowingMatrix<Scalar>> m_batch, m_batch_derivative, m_batch_adjoint;
+    std::vector<GemmWorkspace<Scalar>> m_gemm;
     Index m_batch_columns = -1;  ///< columns of the last recorded forward_batch (−1: none)
 };
 

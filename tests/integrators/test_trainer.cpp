@@ -138,20 +138,20 @@ TEST(TrainingNoise, DoublesTheBatchWithBoundedLatentNoise)
     const IntegratorBatch b = trainer.make_batch(p.samples, idx, rng);
     ASSERT_EQ(b.size(), 2 * n);
     const Index L = p.ae->latent_dim();
-    const MatrixXd clean = b.z_prev.leftCols(n);
+    const MatrixXd clean = b.z_prev().leftCols(n);
     const VectorXd mean = clean.rowwise().mean();
     const VectorXd std = ((clean.colwise() - mean).array().square().rowwise().sum() / double(n)).sqrt();
     for (Index i = 0; i < n; ++i) {
-        EXPECT_EQ(b.z_prev.col(i), p.samples.z_prev.col(idx[size_t(i)]));
-        const VectorXd noise = b.z_prev.col(n + i) - b.z_prev.col(i);
+        EXPECT_EQ(b.z_prev().col(i), p.samples.z_prev.col(idx[size_t(i)]));
+        const VectorXd noise = b.z_prev().col(n + i) - b.z_prev().col(i);
         for (Index c = 0; c < L; ++c) EXPECT_LE(std::abs(noise[c]), 0.1 * std[c] + 1e-15);
         // Boundary parameters and targets unchanged; the noisy inputs carry the noisy latents.
-        EXPECT_EQ(b.inputs.col(n + i).tail(b.inputs.rows() - 2 * L), b.inputs.col(i).tail(b.inputs.rows() - 2 * L));
-        EXPECT_EQ(b.inputs.col(n + i).head(L), b.z_prev.col(n + i));
-        EXPECT_EQ(b.targets.col(n + i), b.targets.col(i));
+        EXPECT_EQ(b.inputs().col(n + i).tail(b.inputs().rows() - 2 * L), b.inputs().col(i).tail(b.inputs().rows() - 2 * L));
+        EXPECT_EQ(b.inputs().col(n + i).head(L), b.z_prev().col(n + i));
+        EXPECT_EQ(b.targets().col(n + i), b.targets().col(i));
     }
-    EXPECT_GT((b.z_prev.rightCols(n) - b.z_prev.leftCols(n)).norm(), 0.0);
-    EXPECT_GT((b.z_prev2.rightCols(n) - b.z_prev2.leftCols(n)).norm(), 0.0);
+    EXPECT_GT((b.z_prev().rightCols(n) - b.z_prev().leftCols(n)).norm(), 0.0);
+    EXPECT_GT((b.z_prev2().rightCols(n) - b.z_prev2().leftCols(n)).norm(), 0.0);
 
     o.training_noise = false;
     IntegratorTrainer plain(*p.model, *p.ae, o);
@@ -178,8 +178,8 @@ TEST(DataBalancing, DividesEachSampleByItsMeanVelocity)
         on.set_velocity_floor(floor);
         const double balanced = on.loss(net, b);
         // |v_{t−1}| of the decoded inputs, computed independently.
-        const MatrixXd x1 = p.ae->decode(b.z_prev, b.targets_prev);
-        const MatrixXd x2 = p.ae->decode(b.z_prev2, b.targets_prev2);
+        const MatrixXd x1 = p.ae->decode(b.z_prev(), b.targets_prev());
+        const MatrixXd x2 = p.ae->decode(b.z_prev2(), b.targets_prev2());
         Vector3d v = Vector3d::Zero();
         for (Index j = 0; j < p.model->num_vertices(); ++j) v += (x1.col(0) - x2.col(0)).segment<3>(3 * j);
         v /= double(p.model->num_vertices()) * p.model->dt();

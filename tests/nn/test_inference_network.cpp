@@ -167,34 +167,30 @@ TEST(InferenceNetwork, BatchedForwardAndVjpMatchSequential)
             const MatrixXd V = test::random_matrix(out, B, rng, -1, 1);
             const MatrixXd Y_ref = net.forward(Z, false);
             const MatrixXd G_ref = vjp_batch(net, Z, V);
-            MatrixXd Y, G;
-            fast_d.forward_batch(Z, Y, true);
-            fast_d.vjp_batch(V, G);
+            const MatrixXd Y = fast_d.forward_batch(Z, true);
+            const MatrixXd G = fast_d.vjp_batch(V);
             ASSERT_EQ(Y.rows(), out);
             ASSERT_EQ(G.rows(), in);
             ASSERT_EQ(G.cols(), B);
             const double y_scale = Y_ref.cwiseAbs().maxCoeff(), g_scale = G_ref.cwiseAbs().maxCoeff();
             EXPECT_LT((Y - Y_ref).cwiseAbs().maxCoeff(), 1e-12 * y_scale) << name << " B=" << B;
             EXPECT_LT((G - G_ref).cwiseAbs().maxCoeff(), 1e-12 * g_scale) << name << " B=" << B;
-            // A second call reuses the swapped buffers and must give the same numbers.
-            MatrixXd Y2, G2;
-            fast_d.forward_batch(Z, Y2, true);
-            fast_d.vjp_batch(V, G2);
+            // A second call reuses the buffers and must give the same numbers.
+            const MatrixXd Y2 = fast_d.forward_batch(Z, true);
+            const MatrixXd G2 = fast_d.vjp_batch(V);
             EXPECT_EQ((Y2 - Y).cwiseAbs().maxCoeff(), 0.0) << name;
             EXPECT_EQ((G2 - G).cwiseAbs().maxCoeff(), 0.0) << name;
-            MatrixXf Yf, Gf;
-            fast_f.forward_batch(Z.cast<float>(), Yf, true);
-            fast_f.vjp_batch(V.cast<float>(), Gf);
+            const MatrixXf Yf = fast_f.forward_batch(Z.cast<float>(), true);
+            const MatrixXf Gf = fast_f.vjp_batch(V.cast<float>());
             EXPECT_LT((Yf.cast<double>() - Y_ref).cwiseAbs().maxCoeff(), 1e-4 * y_scale) << name << " (float)";
             EXPECT_LT((Gf.cast<double>() - G_ref).cwiseAbs().maxCoeff(), 1e-4 * g_scale) << name << " (float)";
         }
         // A VJP needs a recorded forward of as many columns.
-        MatrixXd Y, G;
-        fast_d.forward_batch(MatrixXd::Zero(in, 3), Y, false);
-        EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 3), G), std::invalid_argument) << name;
-        fast_d.forward_batch(MatrixXd::Zero(in, 3), Y, true);
-        EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 4), G), std::invalid_argument) << name;
-        EXPECT_THROW(fast_d.forward_batch(MatrixXd::Zero(in + 1, 3), Y), std::invalid_argument) << name;
+        fast_d.forward_batch(MatrixXd::Zero(in, 3), false);
+        EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 3)), std::invalid_argument) << name;
+        fast_d.forward_batch(MatrixXd::Zero(in, 3), true);
+        EXPECT_THROW(fast_d.vjp_batch(MatrixXd::Zero(out, 4)), std::invalid_argument) << name;
+        EXPECT_THROW(fast_d.forward_batch(MatrixXd::Zero(in + 1, 3)), std::invalid_argument) << name;
     }
 }
 
@@ -217,10 +213,10 @@ TEST(InferenceNetwork, BatchedPassesDoNotDependOnTheThreadCount)
         std::vector<MatrixXf> Yf(3), Gf(3);
         for (int t = 1; t <= 3; ++t) {
             omp_set_num_threads(t);
-            fast_d.forward_batch(Z, Y[size_t(t - 1)], true);
-            fast_d.vjp_batch(V, G[size_t(t - 1)]);
-            fast_f.forward_batch(Z.cast<float>(), Yf[size_t(t - 1)], true);
-            fast_f.vjp_batch(V.cast<float>(), Gf[size_t(t - 1)]);
+            Y[size_t(t - 1)] = fast_d.forward_batch(Z, true);
+            G[size_t(t - 1)] = fast_d.vjp_batch(V);
+            Yf[size_t(t - 1)] = fast_f.forward_batch(Z.cast<float>(), true);
+            Gf[size_t(t - 1)] = fast_f.vjp_batch(V.cast<float>());
         }
         for (size_t t = 1; t < 3; ++t) {
             EXPECT_TRUE((Y[t].array() == Y[0].array()).all()) << "B=" << B << ", " << t + 1 << " threads";
