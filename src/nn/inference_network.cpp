@@ -330,12 +330,14 @@ void scale_rows_by_derivative(ActivationKind kind, const Vec& pre, M&& m)
 /// reverse pass then multiplies by d). The same expressions as apply_activation and
 /// f' = σ(1 + a(1 − σ)), so the values equal those computed separately.
 template <typename A, typename D>
-void activate_with_derivative(ActivationKind kind, A&& a, D&& d)
+void activate_with_derivative(ActivationKind kind, A&& a, D&& d, GrowingMatrix<typename std::decay_t<A>::Scalar>& scratch)
 {
     using S = typename std::decay_t<A>::Scalar;
     switch (kind) {
     case ActivationKind::swish: {
-        const auto denominator = (S(1) + (-a).exp()).eval();
+        // 1 + e^{-a} kept in `scratch` (an evaluated temporary would be allocated per call).
+        auto denominator = scratch.resize(a.rows(), a.cols()).array();
+        denominator = S(1) + (-a).exp();
         const auto sigma = denominator.inverse();
         d = sigma * (S(1) + a * (S(1) - sigma));
         a = a / denominator;
@@ -606,6 +608,19 @@ int column_blocks(Index columns)
     return int(std::min<Index>(omp_get_max_threads(), columns / 32));
 }
 
+/// run_block(b) for b in [0, blocks): one thread each, or directly for one block (an
+/// OpenMP region with a false `if` still makes, and allocates, a team of one).
+template <typename F>
+void for_each_block(int blocks, F&& run_block)
+{
+    if (blocks == 1) {
+        run_block(0);
+        return;
+    }
+#pragma omp parallel for num_threads(blocks) schedule(static)
+    for (int block = 0; block < blocks; ++block) run_block(block);
+}
+
 /// First column of `block` of `blocks` over `columns`. Inner edges fall on multiples of 8, so
 /// every block but the last is whole panels of Eigen's GEMM kernel (4 columns wide; its last
 /// columns, short of a panel, take another kernel with another rounding): each column then
@@ -636,8 +651,8 @@ BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, bool 
     }
     const int blocks = column_blocks(B);
     if (m_gemm.size() < std::size_t(blocks)) m_gemm.resize(std::size_t(blocks));
-#pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
-    for (int block = 0; block < blocks; ++block) {
+    if (m_activation_scratch.size() < std::size_t(blocks)) m_activation_scratch.resize(std::size_t(blocks));
+    auto run_block = [&](int block) {
         const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
         GemmWorkspace<S>& ws = m_gemm[std::size_t(block)];
         for (std::size_t i = 0; i < m_ops.size(); ++i) {
@@ -656,12 +671,14 @@ BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, bool 
             if (op.act != ActivationKind::identity) {
                 auto a = dst.array();
                 if (record)
-                    activate_with_derivative(op.act, a, m_batch_derivative[i].view().middleCols(c0, n).array());
+                    activate_with_derivative(op.act, a, m_batch_derivative[i].view().middleCols(c0, n).array(),
+                                             m_activation_scratch[std::size_t(block)]);
                 else
                     apply_activation(op.act, a);
             }
         }
-    }
+    };
+    for_each_block(blocks, run_block);
     m_batch_columns = record ? B : -1;
     return std::as_const(m_batch[static_cast<std::size_t>(m_output)]).view();
 }
@@ -683,8 +700,7 @@ BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY)
     if (direct) --end;
     const int blocks = column_blocks(B);
     if (m_gemm.size() < std::size_t(blocks)) m_gemm.resize(std::size_t(blocks));
-#pragma omp parallel for num_threads(blocks) schedule(static) if (blocks > 1)
-    for (int block = 0; block < blocks; ++block) {
+    auto run_block = [&](int block) {
         const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
         GemmWorkspace<S>& ws = m_gemm[std::size_t(block)];
         auto adjoint = [&](int buffer) { return m_batch_adjoint[static_cast<std::size_t>(buffer)].view().middleCols(c0, n); };
@@ -718,7 +734,8 @@ BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY)
             case Op::Kind::add: a_src += a_dst; break;
             }
         }
-    }
+    };
+    for_each_block(blocks, run_block);
     return std::as_const(m_batch_adjoint[0]).view();
 }
 

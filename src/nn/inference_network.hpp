@@ -136,6 +136,7 @@ private:
     // GEMMs' packing buffers
     std::vector<GrowingMatrix<Scalar>> m_batch, m_batch_derivative, m_batch_adjoint;
     std::vector<GemmWorkspace<Scalar>> m_gemm;
+    std::vector<GrowingMatrix<Scalar>> m_activation_scratch;  ///< per column block
     Index m_batch_columns = -1;  ///< columns of the last recorded forward_batch (−1: none)
 };
 

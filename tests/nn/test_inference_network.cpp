@@ -262,5 +262,40 @@ TEST(InferenceNetwork, EvaluateAndJacobianRowsDoNotAllocate)
     EXPECT_TRUE(std::isfinite(checksum));
 }
 
+// The batched passes of the trainer's frozen decoder (the paper's armadillo decoder, whose
+// output-layer GEMM packs megabytes) allocate nothing once their buffers have grown to the
+// batch sizes in use (the largest column block of each: 127 columns split 56 + 71 on two
+// threads), whatever order they come in: the near-equal batches of an epoch differ by a
+// column, and the noisy half and the whole batch alternate.
+TEST(InferenceNetwork, BatchedPassesAllocateNothingOnceGrown)
+{
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
+    Rng rng(87);
+    const auto arch = table2_architectures().back();
+    for (bool float32 : {false, true}) {
+        Sequential net = make_mlp(arch.decoder, rng);
+        InferenceNetworkD fast_d(net);
+        InferenceNetwork fast_f(net);
+        const Index in = fast_d.in_features(), out = fast_d.out_features();
+        const MatrixXd Z = test::random_matrix(in, 128, rng, -2, 2);
+        const MatrixXd V = test::random_matrix(out, 128, rng, -1, 1);
+        const MatrixXf Zf = Z.cast<float>(), Vf = V.cast<float>();
+        auto pass = [&](Index columns) {
+            if (float32) {
+                fast_f.forward_batch(Zf.leftCols(columns), true);
+                return double(fast_f.vjp_batch(Vf.leftCols(columns))(0, 0));
+            }
+            fast_d.forward_batch(Z.leftCols(columns), true);
+            return fast_d.vjp_batch(V.leftCols(columns))(0, 0);
+        };
+        double checksum = 0.0;
+        for (Index columns : {Index(64), Index(127), Index(128), Index(63), Index(1), Index(100)}) checksum += pass(columns);  // grows the buffers
+        testing::HeapCounter counter;
+        for (Index columns : {Index(100), Index(1), Index(128), Index(63), Index(127), Index(64)}) checksum += pass(columns);
+        EXPECT_EQ(counter.count(), 0) << (float32 ? "float32" : "double");
+        EXPECT_TRUE(std::isfinite(checksum));
+    }
+}
+
 } // namespace
 } // namespace lb::nn
