@@ -1,6 +1,7 @@
 #include "integrators/latent_mlp_integrator.hpp"
 
 #include <tuple>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/timer.hpp"
@@ -36,17 +37,25 @@ LatentMlpModel LatentMlpModel::create(Index latent_dim, Index param_dim, const s
     return m;
 }
 
-MatrixXd LatentMlpModel::forward(const Eigen::Ref<const MatrixXd>& inputs_raw, const Eigen::Ref<const MatrixXd>& z_prev,
-                                 bool training)
+nn::BatchView LatentMlpModel::forward(const Eigen::Ref<const MatrixXd>& inputs_raw,
+                                     const Eigen::Ref<const MatrixXd>& z_prev, bool training)
 {
-    const MatrixXd out = network.forward(inputs.apply(inputs_raw), training);
-    return z_prev + output_scale.asDiagonal() * out;
+    auto S = standardized.resize(inputs_raw.rows(), inputs_raw.cols());
+    inputs.apply(inputs_raw, S);
+    const nn::BatchView out = network.forward(S, training);
+    prediction.resize(z_prev.rows(), z_prev.cols()) = z_prev + output_scale.asDiagonal() * out;
+    return std::as_const(prediction).view();
 }
 
-MatrixXd LatentMlpModel::backward(const MatrixXd& dZ)
+nn::BatchView LatentMlpModel::backward(const Eigen::Ref<const MatrixXd>& dZ)
 {
     // z = z_prev + s ⊙ out: ∂L/∂out = s ⊙ ∂L/∂z (z_prev is an input, not a parameter).
-    return inputs.backward(network.backward(output_scale.asDiagonal() * dZ, true));
+    auto d_out = output_adjoint.resize(dZ.rows(), dZ.cols());
+    d_out = output_scale.asDiagonal() * dZ;
+    const nn::BatchView d_standardized = network.backward(d_out, true);
+    auto d_inputs = input_gradient.resize(d_standardized.rows(), d_standardized.cols());
+    inputs.backward(d_standardized, d_inputs);
+    return std::as_const(input_gradient).view();
 }
 
 void LatentMlpModel::save(h5::File& file, const std::string& prefix)

@@ -37,15 +37,22 @@ struct LatentMlpModel {
     bool overwrite_dirichlet = false;
     /// What p_t holds (param_dim numbers): the scene's parameters, with the boundary pose or not.
     BoundaryInput boundary;
+    /// forward/backward's buffers (storage that only grows): standardised inputs, output,
+    /// the output's adjoint and the inputs' gradient.
+    nn::GrowingMatrix<double> standardized, prediction, output_adjoint, input_gradient;
 
     Index input_dim() const { return 2 * latent_dim + 3 * param_dim; }
     /// Batched forward in double (training), columns are samples.
     /// @param inputs_raw  input_dim × B unstandardised; @param z_prev  latent × B
-    MatrixXd forward(const Eigen::Ref<const MatrixXd>& inputs_raw, const Eigen::Ref<const MatrixXd>& z_prev, bool training);
+    /// @return latent × B, a view valid until the next forward (no allocation once the
+    /// model's buffers have seen the batch sizes)
+    nn::BatchView forward(const Eigen::Ref<const MatrixXd>& inputs_raw, const Eigen::Ref<const MatrixXd>& z_prev,
+                          bool training);
     /// Backward of the last forward: dZ (latent × B) → accumulates parameter gradients.
-    /// Returns ∂L/∂inputs_raw (input_dim × B) through the network and the standardiser; the
-    /// skip connection's term (∂L/∂z_prev += dZ) is the caller's, as z_prev is passed apart.
-    MatrixXd backward(const MatrixXd& dZ);
+    /// Returns ∂L/∂inputs_raw (input_dim × B, a view valid until the next backward) through
+    /// the network and the standardiser; the skip connection's term (∂L/∂z_prev += dZ) is
+    /// the caller's, as z_prev is passed apart.
+    nn::BatchView backward(const Eigen::Ref<const MatrixXd>& dZ);
 
     static LatentMlpModel create(Index latent_dim, Index param_dim, const std::vector<Index>& hidden,
                                  std::uint64_t seed);

@@ -50,8 +50,7 @@ void balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref
     assert(X_prev.rows() == X_prev2.rows() && X_prev.cols() == X_prev2.cols() && X_prev.rows() % 3 == 0);
     assert(speeds.size() == X_prev.cols());
     const Index N = X_prev.rows() / 3;
-#pragma omp parallel for schedule(static) if (X_prev.cols() >= kParallelColumns)
-    for (Index i = 0; i < X_prev.cols(); ++i) {
+    parallel_for(X_prev.cols(), X_prev.cols() >= kParallelColumns, [&](Index i) {
         // Displacements over h of the N vertices, read in place (no per-column copy).
         Vector3d mean_velocity = Vector3d::Zero();
         double mean_speed = 0.0;
@@ -62,7 +61,7 @@ void balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref
         }
         speeds[i] = velocity == BalancingVelocity::MeanVelocity ? (mean_velocity / double(N) / dt).norm()
                                                                 : mean_speed / double(N) / dt;
-    }
+    });
 }
 
 VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2,
@@ -233,23 +232,28 @@ void IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::ve
 double IntegratorTrainer::evaluate(LatentMlpModel& model, const IntegratorBatch& batch, bool with_gradient)
 {
     const Index B = batch.size();
-    const MatrixXd Zt = model.forward(batch.inputs(), batch.z_prev(), with_gradient);
+    const nn::BatchView Zt = model.forward(batch.inputs(), batch.z_prev(), with_gradient);
     if (m_options.loss == IntegratorLoss::SupervisedL2) {
-        const MatrixXd diff = Zt - batch.z_target();
-        if (with_gradient) model.backward(2.0 * diff / double(B));
+        auto diff = m_difference.resize(Zt.rows(), B);
+        diff = Zt - batch.z_target();
+        if (with_gradient) {
+            auto dZ = m_latent_adjoint.resize(Zt.rows(), B);
+            dZ = 2.0 * diff / double(B);
+            model.backward(dZ);
+        }
         return diff.squaredNorm() / double(B);
     }
 
     // Self-supervised: the incremental potential of the decoded prediction, each sample
     // weighted by data balancing, averaged over the batch.
     step_inputs(batch);
-    LatentEnergyOptions options;
-    options.gradient = with_gradient;
-    options.weights = m_options.data_balancing ? weights_of(m_speeds.view().col(0)) : VectorXd::Ones(B);
-    options.normalization = double(B);
-    const LatentEnergies e = m_potential.evaluate_tilde(Zt, batch.targets(), m_x_tilde.view(), options);
-    if (with_gradient) model.backward(e.grad_z);
-    return e.objective;
+    auto weights = m_weights.resize(m_options.data_balancing ? B : 0, 1).col(0);  // empty: every w_i = 1
+    if (m_options.data_balancing) weights_of(m_speeds.view().col(0), weights);
+    auto grad_z = m_latent_adjoint.resize(with_gradient ? Zt.rows() : 0, with_gradient ? B : 0);
+    const double objective = m_potential.objective_tilde(Zt, batch.targets(), m_x_tilde.view(), weights, double(B),
+                                                         with_gradient, grad_z);
+    if (with_gradient) model.backward(grad_z);
+    return objective;
 }
 
 void IntegratorTrainer::cache_decoded_inputs(const TrainingSamples& samples)
@@ -267,11 +271,10 @@ void IntegratorTrainer::step_inputs(const IntegratorBatch& batch)
     const Index clean = from_cache ? batch.clean : 0;
     Eigen::Map<MatrixXd> X_tilde = m_x_tilde.resize(m_model.num_dofs(), B);
     auto speeds = m_speeds.resize(m_options.data_balancing ? B : 0, 1).col(0);
-#pragma omp parallel for schedule(static) if (clean >= kParallelColumns)
-    for (Index i = 0; i < clean; ++i) {
+    parallel_for(clean, clean >= kParallelColumns, [&](Index i) {
         X_tilde.col(i) = m_cached_tilde.col(batch.source[size_t(i)]);
         if (speeds.size() != 0) speeds[i] = m_cached_speeds[batch.source[size_t(i)]];
-    }
+    });
     const Index decoded = B - clean;
     if (decoded == 0) return;
     // One decoder pass per step, not one over both: the GEMMs' column blocks (and with them
@@ -309,7 +312,14 @@ VectorXd IntegratorTrainer::balancing_weights(const Eigen::Ref<const MatrixXd>& 
 
 VectorXd IntegratorTrainer::weights_of(const Eigen::Ref<const VectorXd>& speeds) const
 {
-    return speeds.unaryExpr([&](double v) { return 1.0 / std::max(v, m_velocity_floor); });
+    VectorXd weights(speeds.size());
+    weights_of(speeds, weights);
+    return weights;
+}
+
+void IntegratorTrainer::weights_of(const Eigen::Ref<const VectorXd>& speeds, Eigen::Ref<VectorXd> weights) const
+{
+    weights = speeds.unaryExpr([&](double v) { return 1.0 / std::max(v, m_velocity_floor); });
 }
 
 namespace {

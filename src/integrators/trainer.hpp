@@ -190,6 +190,7 @@ private:
     void step_inputs(const IntegratorBatch& batch);
     /// 1 / max(|v_{t−1}|, v_floor) of every speed.
     VectorXd weights_of(const Eigen::Ref<const VectorXd>& speeds) const;
+    void weights_of(const Eigen::Ref<const VectorXd>& speeds, Eigen::Ref<VectorXd> weights) const;
 
     const PhysicsModel& m_model;
     Autoencoder& m_autoencoder;
@@ -201,6 +202,9 @@ private:
     /// Batch workspaces that only grow: step_inputs' x̃ (3N × B) and speeds (B × 1), and the
     /// noisy columns' decoded x_{t−1}, x_{t−2}.
     nn::GrowingMatrix<double> m_x_tilde, m_speeds, m_x_prev, m_x_prev2;
+    /// The supervised loss's Z − Z_target; either loss's adjoint ∂loss/∂Z; the samples'
+    /// balancing weights.
+    nn::GrowingMatrix<double> m_difference, m_latent_adjoint, m_weights;
 };
 
 } // namespace lb

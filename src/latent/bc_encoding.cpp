@@ -180,8 +180,8 @@ void BcRelativeEncoding::positions_of_columns(
                                     std::to_string(targets.cols()) + " and " + std::to_string(X.rows()) + " × " +
                                     std::to_string(X.cols()));
     // Columns are independent: parallel over a training batch, serial for a rollout's one frame.
-#pragma omp parallel for schedule(static) if (F.cols() >= kParallelColumns)
-    for (Index s = 0; s < F.cols(); ++s) positions_of_frame(F.col(s).data(), targets.col(s).data(), X.col(s).data());
+    parallel_for(F.cols(), F.cols() >= kParallelColumns,
+                 [&](Index s) { positions_of_frame(F.col(s).data(), targets.col(s).data(), X.col(s).data()); });
 }
 
 MatrixXd BcRelativeEncoding::to_positions(const Eigen::Ref<const MatrixXd>& F,
@@ -218,11 +218,10 @@ void BcRelativeEncoding::gradient_into(const Eigen::Ref<const MatrixXd>& grad_x,
                                     std::to_string(targets.rows()) + " × " + std::to_string(targets.cols()) + " and " +
                                     std::to_string(G.rows()) + " × " + std::to_string(G.cols()));
     const bool identity = !m_rod_relative && m_frame == EncodingFrame::translation;  // P = I
-#pragma omp parallel for schedule(static) if (grad_x.cols() >= kParallelColumns)
-    for (Index s = 0; s < grad_x.cols(); ++s) {
+    parallel_for(grad_x.cols(), grad_x.cols() >= kParallelColumns, [&](Index s) {
         if (identity) {
             G.col(s) = grad_x.col(s).template cast<Scalar>();
-            continue;
+            return;
         }
         const Matrix3d Rt = frame_rotation(targets.col(s).data()).transpose();
         if (m_rod_relative) {
@@ -233,7 +232,7 @@ void BcRelativeEncoding::gradient_into(const Eigen::Ref<const MatrixXd>& grad_x,
             for (Index i = 0; i < m_num_dofs / 3; ++i)
                 G.col(s).template segment<3>(3 * i) = (Rt * grad_x.col(s).segment<3>(3 * i)).template cast<Scalar>();
         }
-    }
+    });
 }
 
 MatrixXd BcRelativeEncoding::gradient_to_features(const Eigen::Ref<const MatrixXd>& grad_x,

@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "energy/inertia_energy.hpp"
 
 namespace lb {
@@ -81,34 +82,61 @@ LatentEnergies LatentPotential::evaluate_columns(const Eigen::Ref<const MatrixXd
                                                  const LatentEnergyOptions& options, bool check_finite)
 {
     const Index B = Z.cols();
+    LatentEnergies out;
+    out.energies.resize(B);
+    out.grad_x.resize(options.gradient ? m_model.num_dofs() : 0, options.gradient ? B : 0);
+    out.grad_z.resize(options.gradient ? Z.rows() : 0, options.gradient ? B : 0);
+    out.objective = evaluate_into(Z, bc_targets, X_tilde, options.weights, options.normalization, options.gradient,
+                                  check_finite, out.energies, out.grad_x, out.grad_z);
+    if (options.decoded) out.X = m_decoded.view();
+    return out;
+}
+
+double LatentPotential::objective_tilde(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                        const Eigen::Ref<const MatrixXd>& X_tilde,
+                                        const Eigen::Ref<const VectorXd>& weights, double normalization,
+                                        bool gradient, Eigen::Ref<MatrixXd> grad_z)
+{
+    const Index B = Z.cols();
+    auto energies = m_energies.resize(B, 1).col(0);
+    auto grad_x = m_grad_x.resize(gradient ? m_model.num_dofs() : 0, gradient ? B : 0);
+    if (gradient && (grad_z.rows() != Z.rows() || grad_z.cols() != B))
+        throw Error("LatentPotential::objective_tilde: grad_z " + shape(grad_z) + ", expected " + shape(Z));
+    return evaluate_into(Z, bc_targets, X_tilde, weights, normalization, gradient, true, energies, grad_x, grad_z);
+}
+
+double LatentPotential::evaluate_into(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                      const Eigen::Ref<const MatrixXd>& X_tilde,
+                                      const Eigen::Ref<const VectorXd>& weights, double normalization,
+                                      bool gradient, bool check_finite, Eigen::Ref<VectorXd> energies,
+                                      Eigen::Ref<MatrixXd> grad_x, Eigen::Ref<MatrixXd> grad_z)
+{
+    const Index B = Z.cols();
     const Index n_dofs = m_model.num_dofs();
     const Index n_targets = 3 * Index(m_model.bc_indices().size());
     if (Z.rows() != m_autoencoder.latent_dim() || bc_targets.rows() != n_targets || bc_targets.cols() != B ||
-        X_tilde.rows() != n_dofs || X_tilde.cols() != B || (options.weights.size() != 0 && options.weights.size() != B))
+        X_tilde.rows() != n_dofs || X_tilde.cols() != B || (weights.size() != 0 && weights.size() != B))
         throw Error("LatentPotential: shapes z " + shape(Z) + ", bc_targets " + shape(bc_targets) + ", x_tilde " +
-                    shape(X_tilde) + ", weights " + std::to_string(options.weights.size()) + "; expected " +
+                    shape(X_tilde) + ", weights " + std::to_string(weights.size()) + "; expected " +
                     std::to_string(m_autoencoder.latent_dim()) + ", " + std::to_string(n_targets) + " and " +
                     std::to_string(n_dofs) + " rows, as many columns, 0 or " + std::to_string(B) + " weights");
-    LatentEnergies out;
     Eigen::Map<MatrixXd> X = m_decoded.resize(n_dofs, B);
     if (decoder_frozen())
-        frozen_positions(Z, bc_targets, options.gradient, X);
+        frozen_positions(Z, bc_targets, gradient, X);
     else
         positions_of(m_autoencoder.decode_features(Z), bc_targets, X);
-    energies_of(X, bc_targets, X_tilde, options, check_finite, out);
-    if (options.gradient) {
+    const double objective =
+        energies_into(X, bc_targets, X_tilde, weights, normalization, gradient, check_finite, energies, grad_x);
+    if (gradient) {
         if (m_overwrite_dirichlet) {  // x_B = x*_B does not depend on z
-            for (int v : m_model.bc_indices()) out.grad_x.middleRows<3>(3 * Index(v)).setZero();
+            for (int v : m_model.bc_indices()) grad_x.middleRows<3>(3 * Index(v)).setZero();
         }
-        if (decoder_frozen()) {
-            out.grad_z.resize(Z.rows(), B);
-            frozen_vjp(out.grad_x, bc_targets, out.grad_z);
-        } else {
-            out.grad_z = m_autoencoder.decoder_vjp(Z, out.grad_x, bc_targets);
-        }
+        if (decoder_frozen())
+            frozen_vjp(grad_x, bc_targets, grad_z);
+        else
+            grad_z = m_autoencoder.decoder_vjp(Z, grad_x, bc_targets);
     }
-    if (options.decoded) out.X = X;
-    return out;
+    return objective;
 }
 
 void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
@@ -116,16 +144,28 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
                                   bool check_finite, LatentEnergies& out)
 {
     const Index B = X.cols();
-    const bool gradient = options.gradient;
-    VectorXd& energies = out.energies;
-    MatrixXd& grad_x = out.grad_x;
-    energies.resize(B);
-    grad_x.resize(gradient ? X.rows() : 0, gradient ? B : 0);
+    out.energies.resize(B);
+    out.grad_x.resize(options.gradient ? X.rows() : 0, options.gradient ? B : 0);
+    out.objective = energies_into(X, bc_targets, X_tilde, options.weights, options.normalization, options.gradient,
+                                  check_finite, out.energies, out.grad_x);
+}
+
+double LatentPotential::energies_into(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
+                                      const Eigen::Ref<const MatrixXd>& X_tilde,
+                                      const Eigen::Ref<const VectorXd>& sample_weights, double normalization,
+                                      bool gradient, bool check_finite, Eigen::Ref<VectorXd> energies,
+                                      Eigen::Ref<MatrixXd> grad_x)
+{
+    const Index B = X.cols();
     // The objective's weights w_i / n: divided (not multiplied by 1/n) so the numbers are
     // those of the integrator loss written out before this class existed.
-    VectorXd weights = options.weights;
-    if (weights.size() == 0) weights.setOnes(B);
-    const VectorXd gradient_scale = weights / options.normalization;
+    auto weights = m_weights.resize(B, 1).col(0);
+    if (sample_weights.size() == 0)
+        weights.setOnes();
+    else
+        weights = sample_weights;
+    auto gradient_scale = m_gradient_scale.resize(B, 1).col(0);
+    gradient_scale = weights / normalization;
     // With gradients, whole groups of kColumnLanes columns take the column pass (the elastic
     // terms vectorised over the samples); the rest one column at a time. Same numbers.
     constexpr Index W = Energy::kColumnLanes;
@@ -134,11 +174,24 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
                                                      [](const WeightedEnergy& t) { return t.energy->has_column_pass(); });
     const Index groups = column_pass ? B / W : 0;
     const Index single = groups * W;  // the first column done alone
-#pragma omp parallel for schedule(dynamic, 1)
-    for (Index job = 0; job < groups + (B - single); ++job) {
+    // Every thread's workspaces sized here, not by the first job a thread happens to draw
+    // (dynamic schedule): a thread's first job of either kind can come batches later.
+    const Index n = X.rows();
+    for (std::size_t t = 0; t < m_columns.size(); ++t) {
+        m_positions[t].resize(n);
+        m_gradients[t].resize(n);
+        if (column_pass) {
+            ColumnWorkspace& ws = m_columns[t];
+            ws.X.resize(n * W);
+            ws.G.resize(n * W);
+            ws.g.resize(W);
+            for (VectorXd& g : ws.g) g.resize(n);
+        }
+    }
+    parallel_for(groups + (B - single), true, [&](Index job) {
         if (job < groups) {
-            energies_of_columns(job * W, X, bc_targets, X_tilde, gradient_scale, out);
-            continue;
+            energies_of_columns(job * W, X, bc_targets, X_tilde, gradient_scale, energies, grad_x);
+            return;
         }
         const Index i = single + (job - groups);
         IncrementalPotential& pot = m_potentials[size_t(omp_get_thread_num())];
@@ -152,16 +205,17 @@ void LatentPotential::energies_of(const Eigen::Ref<const MatrixXd>& X, const Eig
         } else {
             energies[i] = pot.value(xt);
         }
-    }
+    }, /*dynamic=*/true);
     if (check_finite && !energies.allFinite())
         throw NumericalError("non-finite incremental potential in the training batch");
-    out.objective = weights.dot(energies) / options.normalization;
+    return weights.dot(energies) / normalization;
 }
 
 void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X,
                                           const Eigen::Ref<const MatrixXd>& bc_targets,
-                                          const Eigen::Ref<const MatrixXd>& X_tilde, const VectorXd& gradient_scale,
-                                          LatentEnergies& out)
+                                          const Eigen::Ref<const MatrixXd>& X_tilde,
+                                          const Eigen::Ref<const VectorXd>& gradient_scale,
+                                          Eigen::Ref<VectorXd> energies, Eigen::Ref<MatrixXd> grad_x)
 {
     constexpr int W = Energy::kColumnLanes;
     const int thread = omp_get_thread_num();
@@ -170,9 +224,7 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
     ColumnWorkspace& ws = m_columns[size_t(thread)];
     VectorXd& x = m_positions[size_t(thread)];
     const Index n = X.rows();
-    ws.X.resize(n * W);  // allocates once: the sizes do not change between batches
-    ws.G.resize(n * W);
-    ws.g.resize(W);
+    assert(ws.X.size() == n * W && ws.G.size() == n * W && ws.g.size() == size_t(W));  // sized by energies_into
     for (int l = 0; l < W; ++l) ws.g[size_t(l)].setZero(n);
     // Transposes row by row: each row of the 3N × W block is one cache line.
     auto to_rows = [n](const auto& column, double* rows) {
@@ -215,8 +267,8 @@ void LatentPotential::energies_of_columns(Index c0, const Eigen::Ref<const Matri
         k = end;
     }
     for (int l = 0; l < W; ++l) {
-        out.energies[c0 + l] = sums[l];
-        out.grad_x.col(c0 + l) = ws.g[size_t(l)] * gradient_scale[c0 + l];
+        energies[c0 + l] = sums[l];
+        grad_x.col(c0 + l) = ws.g[size_t(l)] * gradient_scale[c0 + l];
     }
 }
 

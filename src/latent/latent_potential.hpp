@@ -98,6 +98,14 @@ public:
     /// x_{t−1}, x_{t−2} that inertial_target() (energy/inertia_energy.hpp) turns into X_tilde.
     LatentEnergies evaluate_tilde(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
                                   const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options = {});
+    /// evaluate_tilde's objective Σ_i w_i E_i / n, and with `gradient` its z-gradient into
+    /// grad_z (latent × B, shaped by the caller; ignored without): the training loop's form.
+    /// The energies, positions and x-gradients stay in buffers the potential keeps, so with a
+    /// frozen decoder nothing is allocated once they have grown to the batch.
+    /// @param weights  B per-sample weights, or empty for all 1
+    double objective_tilde(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                           const Eigen::Ref<const MatrixXd>& X_tilde, const Eigen::Ref<const VectorXd>& weights,
+                           double normalization, bool gradient, Eigen::Ref<MatrixXd> grad_z);
 
     /// Compile the decoder as it is now and use that copy from here on (see above). The
     /// results equal the live decoder's to round-off (the folding reorders operations);
@@ -129,19 +137,33 @@ private:
     void energies_of(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
                      const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options, bool check_finite,
                      LatentEnergies& out);
+    /// energies_of into caller-shaped outputs (energies B, grad_x 3N × B or empty without the
+    /// gradient); weights B or empty (all 1); returns the objective. Its weights live in kept
+    /// buffers: no allocation.
+    double energies_into(const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
+                         const Eigen::Ref<const MatrixXd>& X_tilde, const Eigen::Ref<const VectorXd>& sample_weights,
+                         double normalization, bool gradient, bool check_finite, Eigen::Ref<VectorXd> energies,
+                         Eigen::Ref<MatrixXd> grad_x);
     /// energies_of's gradient pass for the Energy::kColumnLanes columns from c0 on: the terms
     /// with a column pass (the elastic ones) run on all of them at once, the others column
     /// by column; the same numbers as one IncrementalPotential::value_gradient per column, bit
     /// for bit (terms in the same order, each column's sums in the same order).
     void energies_of_columns(Index c0, const Eigen::Ref<const MatrixXd>& X, const Eigen::Ref<const MatrixXd>& bc_targets,
-                             const Eigen::Ref<const MatrixXd>& X_tilde, const VectorXd& gradient_scale,
-                             LatentEnergies& out);
+                             const Eigen::Ref<const MatrixXd>& X_tilde, const Eigen::Ref<const VectorXd>& gradient_scale,
+                             Eigen::Ref<VectorXd> energies, Eigen::Ref<MatrixXd> grad_x);
     /// Give `pot` column i's x̃ and Dirichlet targets.
     static void set_column_state(IncrementalPotential& pot, Index i, const Eigen::Ref<const MatrixXd>& bc_targets,
                                  const Eigen::Ref<const MatrixXd>& X_tilde);
     /// inertial_target(X_prev, X_prev2) after checking both are 3N × B (throws Error naming `caller`).
     MatrixXd checked_x_tilde(const char* caller, Index B, const Eigen::Ref<const MatrixXd>& X_prev,
                              const Eigen::Ref<const MatrixXd>& X_prev2) const;
+    /// evaluate_columns and objective_tilde: the shape checks (throws Error), the decoding into
+    /// m_decoded, energies and (with `gradient`) x- and z-gradients into caller-shaped
+    /// outputs; returns the objective. Throws on a non-finite energy iff check_finite.
+    double evaluate_into(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
+                         const Eigen::Ref<const MatrixXd>& X_tilde, const Eigen::Ref<const VectorXd>& weights,
+                         double normalization, bool gradient, bool check_finite, Eigen::Ref<VectorXd> energies,
+                         Eigen::Ref<MatrixXd> grad_x, Eigen::Ref<MatrixXd> grad_z);
     /// evaluate_tilde(), with the shape checks (throws Error); throws on a non-finite energy iff check_finite.
     LatentEnergies evaluate_columns(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
                                     const Eigen::Ref<const MatrixXd>& X_tilde, const LatentEnergyOptions& options,
@@ -183,6 +205,8 @@ private:
     // Batch workspaces that only grow: evaluate's decoded positions, the double copy's VJP
     // input, the float copy's input (latents, then VJP seeds).
     nn::GrowingMatrix<double> m_decoded, m_feature_grad;
+    // objective_tilde's energies (B × 1) and x-gradients; energies_into's weights and scales.
+    nn::GrowingMatrix<double> m_energies, m_grad_x, m_weights, m_gradient_scale;
     nn::GrowingMatrix<float> m_float_in;
 };
 

@@ -1,6 +1,7 @@
 #include "nn/activation.hpp"
 
 #include <cassert>
+#include <utility>
 
 #include "core/error.hpp"
 
@@ -26,23 +27,35 @@ ActivationKind activation_from_string(const std::string& name)
     throw ConfigError("unknown activation '" + name + "' (expected swish, tanh, relu or identity)");
 }
 
-MatrixXd Activation::forward(const MatrixXd& X, bool /*training*/)
+BatchView Activation::forward(const Eigen::Ref<const MatrixXd>& X, bool /*training*/)
 {
-    m_input = X;
-    MatrixXd Y = X;
+    m_input.resize(X.rows(), X.cols()) = X;
+    auto Y = m_output.resize(X.rows(), X.cols());
+    Y = X;
     auto a = Y.array();
     apply_activation(m_kind, a);
-    return Y;
+    return std::as_const(m_output).view();
 }
 
 MatrixXd Activation::derivative() const
 {
-    return m_input.unaryExpr([k = m_kind](double x) { return activation_derivative(k, x); });
+    return m_input.view().unaryExpr([k = m_kind](double x) { return activation_derivative(k, x); });
 }
 
-MatrixXd Activation::backward(const MatrixXd& dY, bool /*accumulate_parameter_gradients*/)
+// The Jacobian is diagonal, so reverse and forward mode coincide: dX = f'(X) ⊙ dY, with f'
+// evaluated per entry as it is multiplied (no temporary).
+BatchView Activation::backward(const Eigen::Ref<const MatrixXd>& dY, bool /*accumulate_parameter_gradients*/)
 {
-    return tangent(dY);  // the Jacobian is diagonal, so reverse and forward mode coincide
+    assert(dY.rows() == m_input.rows());
+    const auto d = m_input.view().unaryExpr([k = m_kind](double x) { return activation_derivative(k, x); });
+    auto dX = m_input_grad.resize(dY.rows(), dY.cols());
+    if (dY.cols() == m_input.cols()) {
+        dX = dY.cwiseProduct(d);
+    } else {
+        assert(m_input.cols() == 1);
+        dX = (dY.array().colwise() * d.col(0).array()).matrix();
+    }
+    return std::as_const(m_input_grad).view();
 }
 
 MatrixXd Activation::tangent(const MatrixXd& dX) const

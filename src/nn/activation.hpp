@@ -70,8 +70,8 @@ public:
     Index in_features() const override { return 0; }
     Index out_features() const override { return 0; }
 
-    MatrixXd forward(const MatrixXd& X, bool training) override;
-    MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) override;
+    BatchView forward(const Eigen::Ref<const MatrixXd>& X, bool training) override;
+    BatchView backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients = true) override;
     MatrixXd tangent(const MatrixXd& dX) const override;
     void describe(std::ostream& os) const override;
     std::unique_ptr<Layer> clone() const override { return std::make_unique<Activation>(*this); }
@@ -81,7 +81,7 @@ private:
     MatrixXd derivative() const;
 
     ActivationKind m_kind;
-    MatrixXd m_input;
+    GrowingMatrix<double> m_input, m_output, m_input_grad;  ///< cached X; Y, dX
 };
 
 /// x·sigmoid(x) (torch.nn.SiLU).

@@ -1,5 +1,7 @@
 #include "nn/batch_norm.hpp"
 
+#include <utility>
+
 #include <cassert>
 #include <stdexcept>
 
@@ -28,7 +30,7 @@ VectorXd BatchNorm1d::eval_shift() const
     return m_bias.array() - eval_scale().array() * m_running_mean.array();
 }
 
-MatrixXd BatchNorm1d::forward(const MatrixXd& X, bool training)
+BatchView BatchNorm1d::forward(const Eigen::Ref<const MatrixXd>& X, bool training)
 {
     assert(X.rows() == in_features());
     m_training = training;
@@ -49,12 +51,13 @@ MatrixXd BatchNorm1d::forward(const MatrixXd& X, bool training)
         m_inv_std = (m_running_var.array() + m_eps).rsqrt();
         m_x_hat = (X.colwise() - m_running_mean).array().colwise() * m_inv_std.array();
     }
-    MatrixXd Y = (m_x_hat.array().colwise() * m_weight.array()).matrix();
+    auto Y = m_output.resize(X.rows(), B);
+    Y = (m_x_hat.array().colwise() * m_weight.array()).matrix();
     Y.colwise() += m_bias;
-    return Y;
+    return std::as_const(m_output).view();
 }
 
-MatrixXd BatchNorm1d::backward(const MatrixXd& dY, bool accumulate_parameter_gradients)
+BatchView BatchNorm1d::backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients)
 {
     assert(dY.rows() == m_x_hat.rows());
     assert(dY.cols() == m_x_hat.cols() || (!accumulate_parameter_gradients && !m_training));
@@ -63,12 +66,17 @@ MatrixXd BatchNorm1d::backward(const MatrixXd& dY, bool accumulate_parameter_gra
         m_bias_grad += dY.rowwise().sum();
     }
     const Eigen::ArrayXXd dx_hat = dY.array().colwise() * m_weight.array();
-    if (!m_training) return (dx_hat.colwise() * m_inv_std.array()).matrix();
+    auto dX_out = m_input_grad.resize(dY.rows(), dY.cols());
+    if (!m_training) {
+        dX_out = (dx_hat.colwise() * m_inv_std.array()).matrix();
+        return std::as_const(m_input_grad).view();
+    }
     // Through the batch statistics as well.
     const Eigen::ArrayXd mean_dx_hat = dx_hat.rowwise().mean();
     const Eigen::ArrayXd mean_dx_hat_x_hat = (dx_hat * m_x_hat.array()).rowwise().mean();
     const Eigen::ArrayXXd dX = (dx_hat.colwise() - mean_dx_hat) - m_x_hat.array().colwise() * mean_dx_hat_x_hat;
-    return (dX.colwise() * m_inv_std.array()).matrix();
+    dX_out = (dX.colwise() * m_inv_std.array()).matrix();
+    return std::as_const(m_input_grad).view();
 }
 
 MatrixXd BatchNorm1d::tangent(const MatrixXd& dX) const

@@ -22,8 +22,8 @@ public:
     Index in_features() const override { return m_weight.size(); }
     Index out_features() const override { return m_weight.size(); }
 
-    MatrixXd forward(const MatrixXd& X, bool training) override;
-    MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) override;
+    BatchView forward(const Eigen::Ref<const MatrixXd>& X, bool training) override;
+    BatchView backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients = true) override;
     /// Eval mode only (the per-feature affine map); throws std::logic_error after a
     /// training-mode forward.
     MatrixXd tangent(const MatrixXd& dX) const override;
@@ -61,6 +61,7 @@ private:
     bool m_training = false;
     MatrixXd m_x_hat;      ///< normalised input
     VectorXd m_inv_std;    ///< 1/√(σ² + ε) of the statistics used
+    GrowingMatrix<double> m_output, m_input_grad;  ///< Y, dX
 };
 
 } // namespace lb::nn

@@ -7,6 +7,9 @@
 //
 // Contract of a layer:
 //   Y  = forward(X, training)      caches what backward/tangent need (the last call wins)
+//                                  Y and dX are views of buffers the layer owns (storage
+//                                  that only grows: no allocation once a layer has seen
+//                                  its batch sizes), valid until its next forward/backward
 //   dX = backward(dY, param_grads) reverse mode at the cached point; if
 //                                  param_grads, parameter gradients are ACCUMULATED
 //                                  (+=) into the gradient buffers (call zero_grad first).
@@ -26,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "core/types.hpp"
+#include "nn/workspace.hpp"
 
 namespace lb::nn {
 
@@ -48,6 +52,9 @@ struct BufferRef {
     bool integer = false;          ///< stored as an integer dataset (num_batches_tracked)
 };
 
+/// What forward and backward return: a view of a buffer the layer owns.
+using BatchView = Eigen::Map<const MatrixXd>;
+
 class Layer {
 public:
     virtual ~Layer() = default;
@@ -58,10 +65,11 @@ public:
     virtual Index in_features() const = 0;
     virtual Index out_features() const = 0;
 
-    /// @param X  in × B batch.  @return out × B.
-    virtual MatrixXd forward(const MatrixXd& X, bool training) = 0;
-    /// @param dY  out × B adjoint of the last forward's output.  @return in × B.
-    virtual MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) = 0;
+    /// @param X  in × B batch.  @return out × B, valid until the layer's next forward.
+    virtual BatchView forward(const Eigen::Ref<const MatrixXd>& X, bool training) = 0;
+    /// @param dY  out × B adjoint of the last forward's output.  @return in × B, valid until
+    /// the layer's next backward.
+    virtual BatchView backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients = true) = 0;
     /// Forward-mode derivative at the last forward input (which must have been in eval mode
     /// for layers whose training behaviour differs, i.e. BatchNorm).
     virtual MatrixXd tangent(const MatrixXd& dX) const = 0;

@@ -1,6 +1,7 @@
 #include "nn/linear.hpp"
 
 #include <cassert>
+#include <utility>
 
 #include "nn/init.hpp"
 #include "nn/small_product.hpp"
@@ -20,32 +21,32 @@ Linear::Linear(Index in_features, Index out_features, Rng& rng) : Linear(in_feat
     init_linear_default(m_weight, m_bias, rng);
 }
 
-MatrixXd Linear::forward(const MatrixXd& X, bool /*training*/)
+BatchView Linear::forward(const Eigen::Ref<const MatrixXd>& X, bool /*training*/)
 {
     assert(X.rows() == in_features());
-    m_input = X;
-    MatrixXd Y(out_features(), X.cols());
-    Y.noalias() = m_weight * X;
+    m_input.resize(X.rows(), X.cols()) = X;
+    auto Y = m_output.resize(out_features(), X.cols());
+    gemm<double>(m_weight, false, X, Y, GemmOp::assign, m_gemm);
     Y.colwise() += m_bias;
-    return Y;
+    return std::as_const(m_output).view();
 }
 
-MatrixXd Linear::backward(const MatrixXd& dY, bool accumulate_parameter_gradients)
+BatchView Linear::backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients)
 {
     assert(dY.rows() == out_features());
     if (accumulate_parameter_gradients) {
         assert(dY.cols() == m_input.cols());
-        m_weight_grad.noalias() += dY * m_input.transpose();
+        gemm<double>(dY, false, m_input.view(), true, m_weight_grad, GemmOp::add, m_gemm);
         m_bias_grad += dY.rowwise().sum();
     }
-    MatrixXd dX(in_features(), dY.cols());
+    auto dX = m_input_grad.resize(in_features(), dY.cols());
     if (dY.cols() <= small_product_max_columns) {
         dX.setZero();
         add_transpose_product(m_weight, dY, dX);
     } else {
-        dX.noalias() = m_weight.transpose() * dY;
+        gemm<double>(m_weight, true, dY, dX, GemmOp::assign, m_gemm);
     }
-    return dX;
+    return std::as_const(m_input_grad).view();
 }
 
 void Linear::collect_parameters(const std::string& prefix, std::vector<ParameterRef>& out)

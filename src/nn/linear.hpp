@@ -16,9 +16,9 @@ public:
     Index in_features() const override { return m_weight.cols(); }
     Index out_features() const override { return m_weight.rows(); }
 
-    MatrixXd forward(const MatrixXd& X, bool training) override;
+    BatchView forward(const Eigen::Ref<const MatrixXd>& X, bool training) override;
     /// dX = Wᵀ dY;  dW += dY Xᵀ;  db += dY 1.
-    MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) override;
+    BatchView backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients = true) override;
     MatrixXd tangent(const MatrixXd& dX) const override { return m_weight * dX; }
 
     void collect_parameters(const std::string& prefix, std::vector<ParameterRef>& out) override;
@@ -37,7 +37,9 @@ public:
 private:
     MatrixXd m_weight, m_weight_grad;
     VectorXd m_bias, m_bias_grad;
-    MatrixXd m_input;  ///< cached X
+    GrowingMatrix<double> m_input;                 ///< cached X
+    GrowingMatrix<double> m_output, m_input_grad;  ///< Y, dX
+    GemmWorkspace<double> m_gemm;
 };
 
 } // namespace lb::nn

@@ -1,6 +1,7 @@
 #include "nn/residual_block.hpp"
 
 #include <stdexcept>
+#include <utility>
 
 #include "nn/batch_norm.hpp"
 
@@ -29,24 +30,26 @@ ResidualBlock::ResidualBlock(Sequential f, std::optional<Linear> skip) : m_f(std
     }
 }
 
-MatrixXd ResidualBlock::forward(const MatrixXd& X, bool training)
+BatchView ResidualBlock::forward(const Eigen::Ref<const MatrixXd>& X, bool training)
 {
-    MatrixXd Y = m_f.forward(X, training);
+    auto Y = m_output.resize(out_features(), X.cols());
+    Y = m_f.forward(X, training);
     if (m_skip)
         Y += m_skip->forward(X, training);
     else
         Y += X;
-    return Y;
+    return std::as_const(m_output).view();
 }
 
-MatrixXd ResidualBlock::backward(const MatrixXd& dY, bool accumulate)
+BatchView ResidualBlock::backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate)
 {
-    MatrixXd dX = m_f.backward(dY, accumulate);
+    auto dX = m_input_grad.resize(in_features(), dY.cols());
+    dX = m_f.backward(dY, accumulate);
     if (m_skip)
         dX += m_skip->backward(dY, accumulate);
     else
         dX += dY;
-    return dX;
+    return std::as_const(m_input_grad).view();
 }
 
 MatrixXd ResidualBlock::tangent(const MatrixXd& dX) const

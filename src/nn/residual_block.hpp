@@ -28,8 +28,8 @@ public:
     Index in_features() const override { return m_f.in_features(); }
     Index out_features() const override { return m_f.out_features(); }
 
-    MatrixXd forward(const MatrixXd& X, bool training) override;
-    MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) override;
+    BatchView forward(const Eigen::Ref<const MatrixXd>& X, bool training) override;
+    BatchView backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients = true) override;
     MatrixXd tangent(const MatrixXd& dX) const override;
 
     void collect_parameters(const std::string& prefix, std::vector<ParameterRef>& out) override;
@@ -47,6 +47,7 @@ public:
 private:
     Sequential m_f;
     std::optional<Linear> m_skip;
+    GrowingMatrix<double> m_output, m_input_grad;  ///< Y, dX
 };
 
 } // namespace lb::nn

@@ -1,6 +1,8 @@
 #include "nn/sequential.hpp"
 
+#include <new>
 #include <stdexcept>
+#include <utility>
 
 namespace lb::nn {
 
@@ -46,17 +48,31 @@ Index Sequential::out_features() const
     return 0;
 }
 
-MatrixXd Sequential::forward_range(const MatrixXd& X, bool training, Index begin, Index end)
+namespace {
+/// Point `view` at `next` (an Eigen::Map is re-seated by placement new; assigning to it
+/// would copy the coefficients).
+void reseat(BatchView& view, const BatchView& next) { new (&view) BatchView(next.data(), next.rows(), next.cols()); }
+} // namespace
+
+BatchView Sequential::forward_range(const Eigen::Ref<const MatrixXd>& X, bool training, Index begin, Index end)
 {
-    MatrixXd Y = X;
-    for (Index i = begin; i < end; ++i) Y = layer(i).forward(Y, training);
+    if (begin >= end) {
+        m_passthrough.resize(X.rows(), X.cols()) = X;
+        return std::as_const(m_passthrough).view();
+    }
+    BatchView Y = layer(begin).forward(X, training);
+    for (Index i = begin + 1; i < end; ++i) reseat(Y, layer(i).forward(Y, training));
     return Y;
 }
 
-MatrixXd Sequential::backward_range(const MatrixXd& dY, bool accumulate, Index begin, Index end)
+BatchView Sequential::backward_range(const Eigen::Ref<const MatrixXd>& dY, bool accumulate, Index begin, Index end)
 {
-    MatrixXd d = dY;
-    for (Index i = end - 1; i >= begin; --i) d = layer(i).backward(d, accumulate);
+    if (begin >= end) {
+        m_passthrough.resize(dY.rows(), dY.cols()) = dY;
+        return std::as_const(m_passthrough).view();
+    }
+    BatchView d = layer(end - 1).backward(dY, accumulate);
+    for (Index i = end - 2; i >= begin; --i) reseat(d, layer(i).backward(d, accumulate));
     return d;
 }
 
@@ -67,9 +83,12 @@ MatrixXd Sequential::tangent_range(const MatrixXd& dX, Index begin, Index end) c
     return t;
 }
 
-MatrixXd Sequential::forward(const MatrixXd& X, bool training) { return forward_range(X, training, 0, size()); }
+BatchView Sequential::forward(const Eigen::Ref<const MatrixXd>& X, bool training)
+{
+    return forward_range(X, training, 0, size());
+}
 
-MatrixXd Sequential::backward(const MatrixXd& dY, bool accumulate)
+BatchView Sequential::backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate)
 {
     return backward_range(dY, accumulate, 0, size());
 }

@@ -40,14 +40,16 @@ public:
     Index in_features() const override;
     Index out_features() const override;
 
-    MatrixXd forward(const MatrixXd& X, bool training) override;
-    MatrixXd backward(const MatrixXd& dY, bool accumulate_parameter_gradients = true) override;
+    /// The last layer's output (a copy in the network's own buffer when it has no layers).
+    BatchView forward(const Eigen::Ref<const MatrixXd>& X, bool training) override;
+    BatchView backward(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients = true) override;
     MatrixXd tangent(const MatrixXd& dX) const override;
 
     /// Forward through layers [begin, end) only (used by jacobian_rows).
-    MatrixXd forward_range(const MatrixXd& X, bool training, Index begin, Index end);
+    BatchView forward_range(const Eigen::Ref<const MatrixXd>& X, bool training, Index begin, Index end);
     /// Backward through layers [begin, end) in reverse order.
-    MatrixXd backward_range(const MatrixXd& dY, bool accumulate_parameter_gradients, Index begin, Index end);
+    BatchView backward_range(const Eigen::Ref<const MatrixXd>& dY, bool accumulate_parameter_gradients, Index begin,
+                             Index end);
     MatrixXd tangent_range(const MatrixXd& dX, Index begin, Index end) const;
 
     void collect_parameters(const std::string& prefix, std::vector<ParameterRef>& out) override;
@@ -64,6 +66,7 @@ public:
 
 private:
     std::vector<std::unique_ptr<Layer>> m_layers;
+    GrowingMatrix<double> m_passthrough;  ///< an empty range's output: a copy of its input
 };
 
 } // namespace lb::nn

@@ -25,8 +25,15 @@ Standardizer Standardizer::fit(const Eigen::Ref<const MatrixXd>& X, double min_s
 
 MatrixXd Standardizer::apply(const Eigen::Ref<const MatrixXd>& X) const
 {
-    assert(X.rows() == features());
-    return ((X.colwise() - m_mean).array().colwise() / m_std.array()).matrix();
+    MatrixXd out(X.rows(), X.cols());
+    apply(X, out);
+    return out;
+}
+
+void Standardizer::apply(const Eigen::Ref<const MatrixXd>& X, Eigen::Ref<MatrixXd> out) const
+{
+    assert(X.rows() == features() && out.rows() == X.rows() && out.cols() == X.cols());
+    out = ((X.colwise() - m_mean).array().colwise() / m_std.array()).matrix();
 }
 
 MatrixXd Standardizer::invert(const Eigen::Ref<const MatrixXd>& X) const
@@ -36,7 +43,15 @@ MatrixXd Standardizer::invert(const Eigen::Ref<const MatrixXd>& X) const
 
 MatrixXd Standardizer::backward(const Eigen::Ref<const MatrixXd>& dX) const
 {
-    return (dX.array().colwise() / m_std.array()).matrix();
+    MatrixXd out(dX.rows(), dX.cols());
+    backward(dX, out);
+    return out;
+}
+
+void Standardizer::backward(const Eigen::Ref<const MatrixXd>& dX, Eigen::Ref<MatrixXd> out) const
+{
+    assert(out.rows() == dX.rows() && out.cols() == dX.cols());
+    out = (dX.array().colwise() / m_std.array()).matrix();
 }
 
 } // namespace lb::nn

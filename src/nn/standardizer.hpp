@@ -23,10 +23,14 @@ public:
 
     /// @param X  features × B  @return (X − mean)/std
     MatrixXd apply(const Eigen::Ref<const MatrixXd>& X) const;
+    /// The same into `out` (features × B, shaped by the caller).
+    void apply(const Eigen::Ref<const MatrixXd>& X, Eigen::Ref<MatrixXd> out) const;
     /// Inverse map: X' ⊙ std + mean.
     MatrixXd invert(const Eigen::Ref<const MatrixXd>& X_standardized) const;
     /// Chain rule for input gradients: ∂L/∂x = (∂L/∂x') / std (column-wise).
     MatrixXd backward(const Eigen::Ref<const MatrixXd>& dX_standardized) const;
+    /// The same into `out` (features × B, shaped by the caller).
+    void backward(const Eigen::Ref<const MatrixXd>& dX_standardized, Eigen::Ref<MatrixXd> out) const;
 
     Index features() const { return m_mean.size(); }
     bool empty() const { return m_mean.size() == 0; }

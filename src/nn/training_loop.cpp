@@ -222,6 +222,9 @@ EpochRunner::EpochRunner(Learner& learner, const TrainingLoopOptions& o)
       m_bounds(batch_bounds(o, learner.num_samples(), check_options(o, learner.num_samples()))),
       m_order(static_cast<std::size_t>(learner.num_samples()))
 {
+    Index largest = 0;
+    for (std::size_t b = 0; b + 1 < m_bounds.size(); ++b) largest = std::max(largest, m_bounds[b + 1] - m_bounds[b]);
+    m_batch.reserve(static_cast<std::size_t>(largest));
 }
 
 double EpochRunner::run(int epoch)
@@ -231,11 +234,10 @@ double EpochRunner::run(int epoch)
     std::iota(m_order.begin(), m_order.end(), Index(0));
     for (Index i = S - 1; i > 0; --i) std::swap(m_order[std::size_t(i)], m_order[std::size_t(rng.index(i + 1))]);
     double weighted = 0.0;
-    std::vector<Index> idx;
     for (std::size_t b = 0; b + 1 < m_bounds.size(); ++b) {
-        idx.assign(m_order.begin() + m_bounds[b], m_order.begin() + m_bounds[b + 1]);
+        m_batch.assign(m_order.begin() + m_bounds[b], m_order.begin() + m_bounds[b + 1]);
         m_adam.zero_grad();
-        weighted += m_learner.loss_and_gradient(idx, rng) * double(idx.size());
+        weighted += m_learner.loss_and_gradient(m_batch, rng) * double(m_batch.size());
         m_adam.step();
     }
     return weighted / double(m_bounds.back());

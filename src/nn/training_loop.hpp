@@ -140,6 +140,7 @@ private:
     Adam m_adam;
     std::vector<Index> m_bounds;
     std::vector<Index> m_order;
+    std::vector<Index> m_batch;  ///< the current batch's sample indices (kept: no allocation per epoch)
 };
 
 /// Train `learner`; `fingerprint` identifies everything the numbers depend on (nn/checkpoint.hpp).

@@ -7,7 +7,7 @@
 // the first rows × cols entries of kept storage has the layout of a fresh matrix of that
 // shape, so every product and reduction over it rounds exactly as over the fresh matrix.
 //
-// gemm: C = A B or C += A B (A optionally transposed) through Eigen's own kernel and its
+// gemm: C = A B or C += A B (A and B optionally transposed) through Eigen's own kernel and its
 // own blocking sizes, with the packing buffers held by the caller. Eigen's product packs
 // the operands into buffers of kc × mc and kc × nc scalars that it puts on the stack up
 // to 128 KB and on the heap above; the full-size decoders' output layers pack megabytes
@@ -86,49 +86,75 @@ public:
 
 } // namespace detail
 
-/// C = op(A) B (GemmOp::assign) or C += op(A) B (GemmOp::add), op(A) = Aᵀ if transpose_a.
-/// Shapes: op(A) m × k, B k × n, C m × n. No heap allocation once `ws` has grown to the
-/// product's blocks (Eigen 3.4).
+namespace detail {
+#if LB_KEPT_GEMM
+template <typename S, int LhsOrder, int RhsOrder>
+void packed_gemm(Index m, Index n, Index k, const S* A, Index lda, const S* B, Index ldb, S* C, Index ldc,
+                 GemmWorkspace<S>& ws)
+{
+    KeptBlocking<S> blocking(m, n, k, ws);
+    Eigen::internal::general_matrix_matrix_product<Index, S, LhsOrder, false, S, RhsOrder, false, Eigen::ColMajor,
+                                                   1>::run(m, n, k, A, lda, B, ldb, C, 1, ldc, S(1), blocking, nullptr);
+}
+#endif
+} // namespace detail
+
+/// C = op(A) op(B) (GemmOp::assign) or C += op(A) op(B) (GemmOp::add), op(M) = Mᵀ if
+/// transposed. Shapes: op(A) m × k, op(B) k × n, C m × n. No heap allocation once `ws` has
+/// grown to the product's blocks (Eigen 3.4).
 template <typename S>
 void gemm(const Eigen::Ref<const Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>>& A, bool transpose_a,
-          const Eigen::Ref<const Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>>& B,
+          const Eigen::Ref<const Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>>& B, bool transpose_b,
           Eigen::Ref<Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>> C, GemmOp op, GemmWorkspace<S>& ws)
 {
-    const Index m = C.rows(), n = C.cols(), k = B.rows();
-    eigen_assert((transpose_a ? A.cols() : A.rows()) == m && (transpose_a ? A.rows() : A.cols()) == k && B.cols() == n);
+    const Index m = C.rows(), n = C.cols(), k = transpose_b ? B.cols() : B.rows();
+    eigen_assert((transpose_a ? A.cols() : A.rows()) == m && (transpose_a ? A.rows() : A.cols()) == k &&
+                 (transpose_b ? B.rows() : B.cols()) == n);
     // Eigen's own dispatch (generic_product_impl<..., GemmProduct>): tiny products are
     // evaluated coefficient-wise, one row or one column as a GEMV; neither packs.
     const bool packed = LB_KEPT_GEMM && !(k + m + n < EIGEN_GEMM_TO_COEFFBASED_THRESHOLD && k > 0) && m > 1 && n > 1;
     if (!packed) {
-        if (op == GemmOp::assign) {
-            if (transpose_a)
-                C.noalias() = A.transpose() * B;
-            else
-                C.noalias() = A * B;
-        } else {
-            if (transpose_a)
-                C.noalias() += A.transpose() * B;
-            else
-                C.noalias() += A * B;
-        }
+        const bool add = op == GemmOp::add;
+        if (transpose_a && transpose_b)
+            add ? (C.noalias() += A.transpose() * B.transpose()) : (C.noalias() = A.transpose() * B.transpose());
+        else if (transpose_a)
+            add ? (C.noalias() += A.transpose() * B) : (C.noalias() = A.transpose() * B);
+        else if (transpose_b)
+            add ? (C.noalias() += A * B.transpose()) : (C.noalias() = A * B.transpose());
+        else
+            add ? (C.noalias() += A * B) : (C.noalias() = A * B);
         return;
     }
 #if LB_KEPT_GEMM
     if (op == GemmOp::assign) C.setZero();  // as Eigen's evalTo: zero, then accumulate
     if (k == 0) return;
-    detail::KeptBlocking<S> blocking(m, n, k, ws);
     using Eigen::ColMajor;
     using Eigen::RowMajor;
-    if (transpose_a) {
-        Eigen::internal::general_matrix_matrix_product<Index, S, RowMajor, false, S, ColMajor, false, ColMajor, 1>::run(
-            m, n, k, A.data(), A.outerStride(), B.data(), B.outerStride(), C.data(), 1, C.outerStride(), S(1),
-            blocking, nullptr);
-    } else {
-        Eigen::internal::general_matrix_matrix_product<Index, S, ColMajor, false, S, ColMajor, false, ColMajor, 1>::run(
-            m, n, k, A.data(), A.outerStride(), B.data(), B.outerStride(), C.data(), 1, C.outerStride(), S(1),
-            blocking, nullptr);
-    }
+    // A transposed column-major matrix is a row-major one with the same stride.
+    if (transpose_a && transpose_b)
+        detail::packed_gemm<S, RowMajor, RowMajor>(m, n, k, A.data(), A.outerStride(), B.data(), B.outerStride(),
+                                                   C.data(), C.outerStride(), ws);
+    else if (transpose_a)
+        detail::packed_gemm<S, RowMajor, ColMajor>(m, n, k, A.data(), A.outerStride(), B.data(), B.outerStride(),
+                                                   C.data(), C.outerStride(), ws);
+    else if (transpose_b)
+        detail::packed_gemm<S, ColMajor, RowMajor>(m, n, k, A.data(), A.outerStride(), B.data(), B.outerStride(),
+                                                   C.data(), C.outerStride(), ws);
+    else
+        detail::packed_gemm<S, ColMajor, ColMajor>(m, n, k, A.data(), A.outerStride(), B.data(), B.outerStride(),
+                                                   C.data(), C.outerStride(), ws);
+#else
+    (void)ws;
 #endif
+}
+
+/// C = op(A) B or C += op(A) B: gemm with B as it is.
+template <typename S>
+void gemm(const Eigen::Ref<const Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>>& A, bool transpose_a,
+          const Eigen::Ref<const Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>>& B,
+          Eigen::Ref<Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>> C, GemmOp op, GemmWorkspace<S>& ws)
+{
+    gemm<S>(A, transpose_a, B, false, C, op, ws);
 }
 
 } // namespace lb::nn

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <string>
 
 #include "nn/workspace.hpp"
 #include "support/heap_counter.hpp"
@@ -39,34 +40,42 @@ void expect_same_as_eigen()
     GemmWorkspace<S> ws;
     unsigned seed = 1;
     for (const Shape& s : kShapes) {
-        for (bool transpose : {false, true}) {
-            const Mat<S> A_storage =
-                transpose ? random_matrix<S>(s.k, s.m, seed++) : random_matrix<S>(s.m, s.k, seed++);
+        for (int transposes = 0; transposes < 4; ++transposes) {
+            const bool ta = (transposes & 1) != 0, tb = (transposes & 2) != 0;
+            const Mat<S> A_storage = ta ? random_matrix<S>(s.k, s.m, seed++) : random_matrix<S>(s.m, s.k, seed++);
             // As gemm sees it (a Ref), so that the tiny products take the same path.
             const Eigen::Ref<const Mat<S>> A(A_storage);
             // B and C as column blocks of wider matrices, as the batched passes use them.
-            const Mat<S> B_full = random_matrix<S>(s.k, s.n + 3, seed++);
-            const auto B = B_full.middleCols(2, s.n);
+            const Mat<S> B_full = tb ? random_matrix<S>(s.n, s.k + 3, seed++) : random_matrix<S>(s.k, s.n + 3, seed++);
+            const Eigen::Ref<const Mat<S>> B = tb ? B_full.middleCols(2, s.k) : B_full.middleCols(2, s.n);
             const Mat<S> C0 = random_matrix<S>(s.m, s.n, seed++);
             // Both results in column blocks at the same offset of equal matrices: Eigen's
             // coefficient-wise path for tiny products rounds by the destination's alignment.
             Mat<S> got_full = random_matrix<S>(s.m, s.n + 5, seed++), expected_full = got_full;
             auto got = got_full.middleCols(1, s.n);
             auto expected = expected_full.middleCols(1, s.n);
-            if (transpose)
-                expected.noalias() = A.transpose() * B;
-            else
-                expected.noalias() = A * B;
-            gemm<S>(A, transpose, B, got, GemmOp::assign, ws);
-            EXPECT_TRUE(got == expected) << s.m << "×" << s.n << "×" << s.k << " transpose " << transpose << " assign";
+            auto eigen_product = [&](GemmOp op) {
+                const bool add = op == GemmOp::add;
+                if (ta && tb)
+                    add ? (expected.noalias() += A.transpose() * B.transpose())
+                        : (expected.noalias() = A.transpose() * B.transpose());
+                else if (ta)
+                    add ? (expected.noalias() += A.transpose() * B) : (expected.noalias() = A.transpose() * B);
+                else if (tb)
+                    add ? (expected.noalias() += A * B.transpose()) : (expected.noalias() = A * B.transpose());
+                else
+                    add ? (expected.noalias() += A * B) : (expected.noalias() = A * B);
+            };
+            const std::string what = std::to_string(s.m) + "×" + std::to_string(s.n) + "×" + std::to_string(s.k) +
+                                     (ta ? " Aᵀ" : " A") + (tb ? " Bᵀ" : " B");
+            eigen_product(GemmOp::assign);
+            gemm<S>(A, ta, B, tb, got, GemmOp::assign, ws);
+            EXPECT_TRUE(got == expected) << what << " assign";
             expected = C0;
             got = C0;
-            if (transpose)
-                expected.noalias() += A.transpose() * B;
-            else
-                expected.noalias() += A * B;
-            gemm<S>(A, transpose, B, got, GemmOp::add, ws);
-            EXPECT_TRUE(got == expected) << s.m << "×" << s.n << "×" << s.k << " transpose " << transpose << " add";
+            eigen_product(GemmOp::add);
+            gemm<S>(A, ta, B, tb, got, GemmOp::add, ws);
+            EXPECT_TRUE(got == expected) << what << " add";
         }
     }
 }
