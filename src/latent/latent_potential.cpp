@@ -3,7 +3,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <type_traits>
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -121,10 +120,7 @@ double LatentPotential::evaluate_into(const Eigen::Ref<const MatrixXd>& Z, const
                     std::to_string(m_autoencoder.latent_dim()) + ", " + std::to_string(n_targets) + " and " +
                     std::to_string(n_dofs) + " rows, as many columns, 0 or " + std::to_string(B) + " weights");
     Eigen::Map<MatrixXd> X = m_decoded.resize(n_dofs, B);
-    if (decoder_frozen())
-        frozen_positions(Z, bc_targets, gradient, X);
-    else
-        positions_of(m_autoencoder.decode_features(Z), bc_targets, X);
+    decode(Z, bc_targets, X, /*record=*/gradient);
     const double objective =
         energies_into(X, bc_targets, X_tilde, weights, normalization, gradient, check_finite, energies, grad_x);
     if (gradient) {
@@ -342,10 +338,10 @@ MatrixXd LatentPotential::decode(const Eigen::Ref<const MatrixXd>& Z, const Eige
 }
 
 void LatentPotential::decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
-                             Eigen::Ref<MatrixXd> X)
+                             Eigen::Ref<MatrixXd> X, bool record)
 {
     if (decoder_frozen())
-        frozen_positions(Z, bc_targets, false, X);
+        frozen_positions(Z, bc_targets, record, X);
     else
         positions_of(m_autoencoder.decode_features(Z), bc_targets, X);
 }

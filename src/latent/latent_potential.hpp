@@ -119,9 +119,10 @@ public:
     /// autoencoder's decode(); Dirichlet vertices overwritten if overwrites_dirichlet().
     MatrixXd decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets);
     /// The same into X (3N × B, shaped by the caller): with a frozen decoder, no allocation
-    /// once its buffers have grown to the batch.
+    /// once its buffers have grown to the batch. `record` keeps the frozen decoder's tape for
+    /// the z-gradient (evaluate's use).
     void decode(const Eigen::Ref<const MatrixXd>& Z, const Eigen::Ref<const MatrixXd>& bc_targets,
-                Eigen::Ref<MatrixXd> X);
+                Eigen::Ref<MatrixXd> X, bool record = false);
 
     /// The incremental potentials of B given position vectors (no decoding) and, if
     /// options.gradient, their weighted x-gradients LatentEnergies::grad_x (grad_z stays

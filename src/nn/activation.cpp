@@ -37,34 +37,30 @@ BatchView Activation::forward(const Eigen::Ref<const MatrixXd>& X, bool /*traini
     return std::as_const(m_output).view();
 }
 
-MatrixXd Activation::derivative() const
+void Activation::scale_by_derivative(const Eigen::Ref<const MatrixXd>& dX, Eigen::Ref<MatrixXd> out) const
 {
-    return m_input.view().unaryExpr([k = m_kind](double x) { return activation_derivative(k, x); });
-}
-
-// The Jacobian is diagonal, so reverse and forward mode coincide: dX = f'(X) ⊙ dY, with f'
-// evaluated per entry as it is multiplied (no temporary).
-BatchView Activation::backward(const Eigen::Ref<const MatrixXd>& dY, bool /*accumulate_parameter_gradients*/)
-{
-    assert(dY.rows() == m_input.rows());
+    assert(dX.rows() == m_input.rows() && out.rows() == dX.rows() && out.cols() == dX.cols());
     const auto d = m_input.view().unaryExpr([k = m_kind](double x) { return activation_derivative(k, x); });
-    auto dX = m_input_grad.resize(dY.rows(), dY.cols());
-    if (dY.cols() == m_input.cols()) {
-        dX = dY.cwiseProduct(d);
+    if (dX.cols() == m_input.cols()) {
+        out = dX.cwiseProduct(d);
     } else {
         assert(m_input.cols() == 1);
-        dX = (dY.array().colwise() * d.col(0).array()).matrix();
+        out = (dX.array().colwise() * d.col(0).array()).matrix();
     }
+}
+
+// The Jacobian is diagonal, so reverse and forward mode coincide.
+BatchView Activation::backward(const Eigen::Ref<const MatrixXd>& dY, bool /*accumulate_parameter_gradients*/)
+{
+    scale_by_derivative(dY, m_input_grad.resize(dY.rows(), dY.cols()));
     return std::as_const(m_input_grad).view();
 }
 
 MatrixXd Activation::tangent(const MatrixXd& dX) const
 {
-    assert(dX.rows() == m_input.rows());
-    const MatrixXd d = derivative();
-    if (dX.cols() == d.cols()) return dX.cwiseProduct(d);
-    assert(d.cols() == 1);
-    return (dX.array().colwise() * d.col(0).array()).matrix();
+    MatrixXd dY(dX.rows(), dX.cols());
+    scale_by_derivative(dX, dY);
+    return dY;
 }
 
 void Activation::describe(std::ostream& os) const { os << "{\"type\": \"" << type_name() << "\"}"; }

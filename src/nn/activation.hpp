@@ -77,8 +77,9 @@ public:
     std::unique_ptr<Layer> clone() const override { return std::make_unique<Activation>(*this); }
 
 private:
-    /// f'(X) at the cached input, same shape as X.
-    MatrixXd derivative() const;
+    /// out = f'(X) ⊙ dX at the cached input X: dX of its shape, or of any number of columns
+    /// when X is one sample. f' is evaluated per entry as it is multiplied (no temporary).
+    void scale_by_derivative(const Eigen::Ref<const MatrixXd>& dX, Eigen::Ref<MatrixXd> out) const;
 
     ActivationKind m_kind;
     GrowingMatrix<double> m_input, m_output, m_input_grad;  ///< cached X; Y, dX

@@ -1,9 +1,8 @@
 #include "nn/batch_norm.hpp"
 
-#include <utility>
-
 #include <cassert>
 #include <stdexcept>
+#include <utility>
 
 namespace lb::nn {
 

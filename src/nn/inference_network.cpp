@@ -14,6 +14,7 @@
 #define LB_NN_AVX_FMA 1
 #endif
 
+#include "core/parallel.hpp"
 #include "nn/batch_norm.hpp"
 #include "nn/linear.hpp"
 #include "nn/residual_block.hpp"
@@ -608,19 +609,6 @@ int column_blocks(Index columns)
     return int(std::min<Index>(omp_get_max_threads(), columns / 32));
 }
 
-/// run_block(b) for b in [0, blocks): one thread each, or directly for one block (an
-/// OpenMP region with a false `if` still makes, and allocates, a team of one).
-template <typename F>
-void for_each_block(int blocks, F&& run_block)
-{
-    if (blocks == 1) {
-        run_block(0);
-        return;
-    }
-#pragma omp parallel for num_threads(blocks) schedule(static)
-    for (int block = 0; block < blocks; ++block) run_block(block);
-}
-
 /// First column of `block` of `blocks` over `columns`. Inner edges fall on multiples of 8, so
 /// every block but the last is whole panels of Eigen's GEMM kernel (4 columns wide; its last
 /// columns, short of a panel, take another kernel with another rounding): each column then
@@ -652,7 +640,8 @@ BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, bool 
     const int blocks = column_blocks(B);
     if (m_gemm.size() < std::size_t(blocks)) m_gemm.resize(std::size_t(blocks));
     if (m_activation_scratch.size() < std::size_t(blocks)) m_activation_scratch.resize(std::size_t(blocks));
-    auto run_block = [&](int block) {
+    auto run_block = [&](Index b) {
+        const int block = int(b);
         const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
         GemmWorkspace<S>& ws = m_gemm[std::size_t(block)];
         for (std::size_t i = 0; i < m_ops.size(); ++i) {
@@ -678,7 +667,7 @@ BasicInferenceNetwork<S>::forward_batch(const Eigen::Ref<const Matrix>& X, bool 
             }
         }
     };
-    for_each_block(blocks, run_block);
+    parallel_for(blocks, blocks > 1, run_block);  // one block per thread (blocks ≤ threads)
     m_batch_columns = record ? B : -1;
     return std::as_const(m_batch[static_cast<std::size_t>(m_output)]).view();
 }
@@ -700,7 +689,8 @@ BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY)
     if (direct) --end;
     const int blocks = column_blocks(B);
     if (m_gemm.size() < std::size_t(blocks)) m_gemm.resize(std::size_t(blocks));
-    auto run_block = [&](int block) {
+    auto run_block = [&](Index b) {
+        const int block = int(b);
         const Index c0 = block_start(block, blocks, B), n = block_start(block + 1, blocks, B) - c0;
         GemmWorkspace<S>& ws = m_gemm[std::size_t(block)];
         auto adjoint = [&](int buffer) { return m_batch_adjoint[static_cast<std::size_t>(buffer)].view().middleCols(c0, n); };
@@ -735,7 +725,7 @@ BasicInferenceNetwork<S>::vjp_batch(const Eigen::Ref<const Matrix>& dY)
             }
         }
     };
-    for_each_block(blocks, run_block);
+    parallel_for(blocks, blocks > 1, run_block);  // one block per thread (blocks ≤ threads)
     return std::as_const(m_batch_adjoint[0]).view();
 }
 
