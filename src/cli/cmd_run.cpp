@@ -2,6 +2,7 @@
 
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
+#include "pipeline/deviations.hpp"
 #include "pipeline/experiment.hpp"
 #include "pipeline/plan.hpp"
 #include "scene/scene.hpp"
@@ -10,7 +11,7 @@ namespace lb::cli {
 namespace {
 
 /// `run --check`: every scene loaded and validated, then what would run.
-void print_plan(const ExperimentConfig& ex, const std::string& run_dir)
+void print_plan(const ExperimentConfig& ex, const std::string& run_dir, const std::string& deviations_dir)
 {
     std::printf("experiment %s: %zu scenes, run directory %s\n", ex.name.c_str(), ex.scenes.size(), run_dir.c_str());
     for (const SceneSpec& s : ex.scenes) {
@@ -28,6 +29,16 @@ void print_plan(const ExperimentConfig& ex, const std::string& run_dir)
                 ex.rollout_frames > 0 ? std::to_string(ex.rollout_frames).c_str() : "all",
                 ex.full_space ? "yes" : "no");
     print_unit_plan(ex, plan_experiment(ex, resolve_run_dir(ex, run_dir)), false);
+    for (const SceneSpec& s : ex.scenes) {
+        const Scene scene = load_scene(s.scene_path, {s.variant});
+        const Table deviations = deviations_table(ex, s, scene.name, resolved_autoencoder(s, scene));
+        std::printf("\n%s", to_markdown(deviations).c_str());
+        if (!deviations_dir.empty()) {
+            const std::vector<std::string> written =
+                write_table_files(deviations, deviations_dir + "/deviations_" + s.label);
+            std::printf("written: %s\n", written.front().c_str());
+        }
+    }
     std::printf("the configuration is valid; nothing was run\n");
 }
 
@@ -40,6 +51,7 @@ void register_run(CLI::App& app)
         std::vector<std::string> force;
         std::string unit;
         bool check = false, merge = false;
+        std::string deviations_dir;
         std::vector<std::string> scenes, integrators;
     };
     auto a = std::make_shared<Args>();
@@ -57,13 +69,18 @@ void register_run(CLI::App& app)
                     "with the whole suite");
     cmd->add_option("--integrator", a->integrators,
                     "Run only the [[integrators]] entry with this name (repeatable; full_space runs as configured)");
+    cmd->add_option("--write-deviations", a->deviations_dir,
+                    "With --check: also write each scene's deviations table (deviations_<scene>.md/.csv/.tex) into "
+                    "this existing folder, e.g. a published suite's tables/")
+        ->check(CLI::ExistingDirectory)
+        ->needs(check);
     check->excludes(unit)->excludes(merge);
     unit->excludes(merge);
     cmd->callback([a] {
         ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
         if (!a->scenes.empty() || !a->integrators.empty()) ex = select_subset(ex, a->scenes, a->integrators);
         if (a->check) {
-            print_plan(ex, a->output.empty() ? ex.output_dir : a->output);
+            print_plan(ex, a->output.empty() ? ex.output_dir : a->output, a->deviations_dir);
             return;
         }
         RunOptions options;

@@ -86,6 +86,15 @@ std::string IntegratorTrainOptions::representation_text() const
     return s;
 }
 
+std::string to_string(NoiseDraw draw) { return draw == NoiseDraw::Shared ? "shared" : "independent"; }
+
+NoiseDraw noise_draw_from_string(const std::string& name)
+{
+    if (name == "independent") return NoiseDraw::Independent;
+    if (name == "shared") return NoiseDraw::Shared;
+    throw ConfigError("unknown noise draw '" + name + "' (independent or shared)");
+}
+
 std::string IntegratorTrainOptions::describe() const
 {
     std::ostringstream s;
@@ -107,6 +116,7 @@ std::string IntegratorTrainer::resolved_options(Index num_samples) const
     s << ";epochs=" << o.epochs << ";batch=" << std::min<Index>(o.batch_size, num_samples)
       << ";lr=" << nn::exact_text(o.learning_rate) << ";noise=" << (o.training_noise ? "on" : "off");
     if (o.training_noise) s << ";noise_fraction=" << nn::exact_text(o.noise_fraction);
+    if (o.training_noise && o.noise_draw != NoiseDraw::Independent) s << ";noise_draw=" << to_string(o.noise_draw);
     if (self_supervised) {
         s << ";balancing=" << (o.data_balancing ? "on" : "off");
         if (o.data_balancing) s << ";balancing_floor=" << nn::exact_text(o.balancing_floor);
@@ -213,6 +223,10 @@ void IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::ve
     if (copies == 2) {
         // Uniform noise of noise_fraction × the batch's per-component std on the
         // second copy's input latents; boundary parameters unchanged.
+        // With NoiseDraw::Shared the first latent's draws are kept and reused for the second.
+        const bool shared = m_options.noise_draw == NoiseDraw::Shared;
+        if (shared && (b.m_draw.rows() != L || b.m_draw.cols() < n)) b.m_draw.resize(L, std::max(n, b.m_draw.cols()));
+        bool first = true;
         for (nn::GrowingMatrix<double>* buffer : {&b.m_z_prev, &b.m_z_prev2}) {
             Eigen::Map<MatrixXd> z = buffer->view();
             const auto clean = z.leftCols(n);
@@ -220,9 +234,18 @@ void IntegratorTrainer::make_batch(const TrainingSamples& samples, const std::ve
             b.m_std = ((clean.colwise() - b.m_mean).array().square().rowwise().sum() / double(n)).sqrt();
             for (Index i = 0; i < n; ++i) {
                 for (Index c = 0; c < L; ++c) {
-                    z(c, n + i) += m_options.noise_fraction * b.m_std[c] * rng.uniform(-1.0, 1.0);
+                    double u;
+                    if (!shared) {
+                        u = rng.uniform(-1.0, 1.0);
+                    } else if (first) {
+                        u = b.m_draw(c, i) = rng.uniform(-1.0, 1.0);
+                    } else {
+                        u = b.m_draw(c, i);
+                    }
+                    z(c, n + i) += m_options.noise_fraction * b.m_std[c] * u;
                 }
             }
+            first = false;
         }
     }
     inputs.topRows(L) = b.z_prev();

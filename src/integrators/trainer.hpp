@@ -63,6 +63,13 @@ VectorXd balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen:
 void balancing_speeds(const Eigen::Ref<const MatrixXd>& X_prev, const Eigen::Ref<const MatrixXd>& X_prev2, double dt,
                       BalancingVelocity velocity, Eigen::Ref<VectorXd> speeds);
 
+/// Training noise on the two input latents (issue 39; the paper does not say): an
+/// independent uniform draw for z_{t−1} and for z_{t−2} (the default), or one draw u per
+/// sample and component shared by both, each scaled by its own latent's batch std.
+enum class NoiseDraw { Independent, Shared };
+std::string to_string(NoiseDraw draw);
+NoiseDraw noise_draw_from_string(const std::string& name);
+
 struct IntegratorTrainOptions : nn::TrainingRunOptions {
     IntegratorLoss loss = IntegratorLoss::SelfSupervised;
     std::vector<Index> hidden{256, 256, 256, 256, 256};
@@ -71,6 +78,7 @@ struct IntegratorTrainOptions : nn::TrainingRunOptions {
     double learning_rate = 1e-4;
     bool training_noise = true;
     double noise_fraction = 0.1;
+    NoiseDraw noise_draw = NoiseDraw::Independent;
     bool data_balancing = true;
     BalancingVelocity balancing_velocity = BalancingVelocity::MeanVelocity;
     double balancing_floor = 0.05;
@@ -130,6 +138,7 @@ private:
     friend class IntegratorTrainer;
     nn::GrowingMatrix<double> m_inputs, m_z_prev, m_z_prev2, m_z_target, m_targets, m_targets_prev, m_targets_prev2;
     VectorXd m_mean, m_std;  ///< the noise's per-component statistics (latent)
+    MatrixXd m_draw;         ///< latent × B uniform draws shared by both latents (NoiseDraw::Shared)
 };
 
 /// What a training run did (epochs, final loss, resumed, time-limited, why a checkpoint

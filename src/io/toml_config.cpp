@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -328,6 +330,25 @@ std::string to_toml_string(const toml::table& table)
     std::ostringstream ss;
     ss << table;
     return ss.str();
+}
+
+std::string toml_value_text(const toml::node& value)
+{
+    if (const auto* f = value.as_floating_point()) {
+        // The shortest text that reads back as the same double: "0.1", not "0.10000000000000001".
+        const double v = f->get();
+        char text[40];
+        for (int digits = 1; digits <= 17; ++digits) {
+            std::snprintf(text, sizeof text, "%.*g", digits, v);
+            if (std::strtod(text, nullptr) == v) break;
+        }
+        std::string out = text;
+        if (out.find_first_of(".eni") == std::string::npos) out += ".0";
+        return out;
+    }
+    std::ostringstream out;
+    value.visit([&](const auto& v) { out << v; });
+    return out.str();
 }
 
 } // namespace lb

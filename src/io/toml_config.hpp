@@ -86,6 +86,9 @@ toml::table parse_toml_file(const std::string& path);
 void merge_toml(toml::table& base, const toml::table& overlay);
 /// Serialise a table back to TOML text (the "resolved config" embedded in outputs).
 std::string to_toml_string(const toml::table& table);
+/// One value as TOML text: a float as the shortest text that reads back as the same
+/// double ("0.1", "1.0"), anything else as toml++ prints it.
+std::string toml_value_text(const toml::node& value);
 /// Read a whole text file; IoError if it cannot be read.
 std::string read_text_file(const std::string& path);
 

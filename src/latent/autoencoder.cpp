@@ -157,14 +157,27 @@ double Autoencoder::initialize_pca(const MatrixXd& features)
     if (m_options.pca_dim == 0) return 0.0;
     const Index S = features.cols();
     if (S < 2) throw ConfigError("autoencoder: PCA initialisation needs at least 2 training frames");
-    const Index d = std::min(m_options.pca_dim, S - 1);
+    Index d = std::min(m_options.pca_dim, S - 1);
     if (d != m_options.pca_dim) {
         log_info("autoencoder: pca_dim %ld clamped to %ld (%ld training frames)", long(m_options.pca_dim), long(d),
                  long(S));
+    }
+    PcaBasis pca = compute_pca(features, d);
+    // Never wider than the data (issue 39): directions past the numerical rank carry no
+    // variance and are an arbitrary completion, which touches the rows the data holds
+    // constant (e.g. Dirichlet vertices' boundary-relative offsets) and lets training move them.
+    if (pca.rank < d) {
+        log_warn("autoencoder: PCA layer clamped from %ld to %ld, the numerical rank of the %ld training frames "
+                 "(directions with variance > %.0e of the largest); the rest would carry no data",
+                 long(d), long(std::max<Index>(pca.rank, 1)), long(S), kPcaRankTolerance);
+        d = std::max<Index>(pca.rank, 1);
+        pca.basis.conservativeResize(Eigen::NoChange, d);
+        pca.variances.conservativeResize(d);
+    }
+    if (d != m_options.pca_dim) {
         m_options.pca_dim = d;
         build_networks();
     }
-    const PcaBasis pca = compute_pca(features, d);
     nn::Linear& first = linear_layer(m_encoder, 0, "encoder's first layer");
     nn::Linear& last = linear_layer(m_decoder, m_decoder.size() - 1, "decoder's last layer");
     assert(first.weight().rows() == d && last.weight().cols() == d);
@@ -300,10 +313,23 @@ Autoencoder Autoencoder::load_from(const h5::File& file, const std::string& pref
 
 // ---- data ------------------------------------------------------------------------------
 
-FrameSet training_frames(const Dataset& data)
+std::string to_string(AutoencoderFrames frames) { return frames == AutoencoderFrames::all ? "all" : "train"; }
+
+AutoencoderFrames autoencoder_frames_from_string(const std::string& text)
 {
+    if (text == "train") return AutoencoderFrames::train;
+    if (text == "all") return AutoencoderFrames::all;
+    throw ConfigError("unknown value '" + text + "' (train: the training window only; all: every frame)");
+}
+
+FrameSet training_frames(const Dataset& data, AutoencoderFrames which)
+{
+    auto frames_of = [which](const auto& seq) {
+        return which == AutoencoderFrames::all ? Index(seq.num_frames())
+                                               : std::min<Index>(seq.train_frames, seq.num_frames());
+    };
     Index S = 0;
-    for (const auto& seq : data.sequences) S += std::min<Index>(seq.train_frames, seq.num_frames());
+    for (const auto& seq : data.sequences) S += frames_of(seq);
     const Index n = 3 * data.physics.mesh.num_vertices();
     const Index nb = 3 * Index(data.physics.bc_indices.size());
     FrameSet fs;
@@ -311,7 +337,7 @@ FrameSet training_frames(const Dataset& data)
     fs.bc_targets.resize(nb, S);
     Index j = 0;
     for (const auto& seq : data.sequences) {
-        const Index T = std::min<Index>(seq.train_frames, seq.num_frames());
+        const Index T = frames_of(seq);
         for (Index t = 0; t < T; ++t, ++j) {
             fs.positions.col(j) = seq.positions.row(t).transpose();
             fs.bc_targets.col(j) = seq.bc_positions.row(t).transpose();
@@ -514,7 +540,7 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     if (ae.scene_name().empty()) ae.set_scene_name(data.scene_name);
 
     // ---- data: features, train / validation split by frame
-    const FrameSet frames = training_frames(data);
+    const FrameSet frames = training_frames(data, options.frames_seen);
     const MatrixXd all_features = enc.to_features(frames.positions);
     const Index S_all = all_features.cols();
     std::vector<Index> train_idx, val_idx;

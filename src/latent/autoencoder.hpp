@@ -32,16 +32,25 @@ namespace h5 {
 class File;
 }
 
+/// Which frames the autoencoder trains on (issue 39; the paper does not say): the training
+/// window only (frames before each sequence's train_frames, the default) or every frame,
+/// the test window included. The integrators train on the training window either way.
+enum class AutoencoderFrames { train, all };
+std::string to_string(AutoencoderFrames frames);
+/// "train" / "all"; throws ConfigError naming the accepted values.
+AutoencoderFrames autoencoder_frames_from_string(const std::string& text);
+
 struct AutoencoderOptions : nn::TrainingRunOptions {
     // architecture
     Index latent_dim = 4;
     std::vector<Index> hidden{200, 200, 200};  ///< decoder widths after the latent; encoder mirrors them
-    Index pca_dim = 50;                        ///< clamped to the number of training frames and features
+    Index pca_dim = 50;                        ///< clamped to the training features' numerical rank
     bool batch_norm = true;
     bool residual = true;
     /// The features' frame (bc_encoding.hpp): the paper's translation-only one, or the
     /// boundary's rigid frame (rotation removed as well).
     EncodingFrame frame = EncodingFrame::translation;
+    AutoencoderFrames frames_seen = AutoencoderFrames::train;  ///< suite key `autoencoder_frames`
     // training (Adam, lr 1e-4, batch 500 in the paper)
     int epochs = 2000;
     int batch_size = 500;
@@ -101,8 +110,9 @@ public:
 
     /// Set the encoder's first and the decoder's last linear layer from a PCA of the
     /// training features (F × S): W_enc = U_dᵀ, b_enc = −U_dᵀ μ, W_dec = U_d, b_dec = μ.
-    /// If min(pca_dim, S − 1) is below the current width, pca_dim is lowered to it
-    /// (recorded in options()) and both networks are rebuilt from seed() first.
+    /// If min(pca_dim, S − 1, the features' numerical rank) is below the current width,
+    /// pca_dim is lowered to it (recorded in options(); a warning states both numbers when
+    /// the rank decides) and both networks are rebuilt from seed() first.
     /// Returns the fraction of the features' variance the d directions capture.
     double initialize_pca(const MatrixXd& features);
 
@@ -160,7 +170,7 @@ struct FrameSet {
     MatrixXd positions;
     MatrixXd bc_targets;
 };
-FrameSet training_frames(const Dataset& data);
+FrameSet training_frames(const Dataset& data, AutoencoderFrames which = AutoencoderFrames::train);
 
 /// Train with the reconstruction MSE; PCA-initialises first. Progress (epoch,
 /// train/validation loss, time) on stderr; checkpoints and resume as in the options.

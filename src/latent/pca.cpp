@@ -46,11 +46,12 @@ PcaBasis compute_pca(const MatrixXd& X, Index dim)
         Eigen::SelfAdjointEigenSolver<MatrixXd> eig(G);  // ascending eigenvalues
         const VectorXd& lambda = eig.eigenvalues();
         const double lambda_max = std::max(lambda(S - 1), 0.0);
+        for (Index k = 0; k < S; ++k) pca.rank += lambda(k) > kPcaRankTolerance * lambda_max && lambda(k) > 0.0;
         MatrixXd U = MatrixXd::Zero(F, dim);
         for (Index j = 0; j < dim; ++j) {
             const Index k = S - 1 - j;
             const double l = j < S ? lambda(k) : 0.0;
-            if (j < S && l > 1e-12 * lambda_max && l > 0.0) {
+            if (j < S && l > kPcaRankTolerance * lambda_max && l > 0.0) {
                 U.col(j) = C * eig.eigenvectors().col(k) / std::sqrt(l);
                 pca.variances(j) = l / double(S);
             } else {
@@ -68,6 +69,9 @@ PcaBasis compute_pca(const MatrixXd& X, Index dim)
         MatrixXd G = MatrixXd::Zero(F, F);
         G.selfadjointView<Eigen::Lower>().rankUpdate(C);
         Eigen::SelfAdjointEigenSolver<MatrixXd> eig(G);
+        const double lambda_max = std::max(eig.eigenvalues()(F - 1), 0.0);
+        for (Index k = 0; k < F; ++k)
+            pca.rank += eig.eigenvalues()(k) > kPcaRankTolerance * lambda_max && eig.eigenvalues()(k) > 0.0;
         pca.basis.resize(F, dim);
         for (Index j = 0; j < dim; ++j) {
             pca.basis.col(j) = eig.eigenvectors().col(F - 1 - j);

@@ -16,11 +16,18 @@
 
 namespace lb {
 
+/// Relative eigenvalue (variance) below which a direction counts as carrying none.
+inline constexpr double kPcaRankTolerance = 1e-12;
+
 struct PcaBasis {
     VectorXd mean;       ///< F, μ
     MatrixXd basis;      ///< F × d, orthonormal columns, by decreasing variance
     VectorXd variances;  ///< d, λ_i / S (population variance along each direction)
     double total_variance = 0.0;  ///< ||C||_F² / S
+    /// Numerical rank of C: the directions with λ > kPcaRankTolerance · λ_max (of all
+    /// min(F, S) directions, not only the d computed). Columns of `basis` past it carry no
+    /// variance: they are an arbitrary orthonormal completion.
+    Index rank = 0;
 
     Index dim() const { return basis.cols(); }
     /// Fraction of the total variance captured by the d directions (1 if there is none).

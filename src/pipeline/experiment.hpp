@@ -39,6 +39,10 @@ struct SceneSpec {
     std::string label;       ///< folder name and table label, e.g. "cloth_small"
     AutoencoderOptions autoencoder;
     bool latent_given = false;
+    bool hidden_given = false;  ///< the suite or scene set [autoencoder] hidden
+    /// The suite's `recipe` ("paper" or "none"): with "paper", an autoencoder whose widths are
+    /// not set gets Table 2's decoder widths for the scene (resolved_autoencoder).
+    std::string recipe = "none";
     std::vector<MethodSpec> methods;
 };
 
@@ -64,6 +68,9 @@ struct ExperimentConfig {
     std::string toml_text;   ///< resolved configuration, embedded in outputs
     std::string output_dir;  ///< run directory
     int threads = 0;
+    /// `recipe = "paper"`: every [autoencoder] and [training] key the suite does not set takes
+    /// the paper's stated value (paper/paper_recipe.hpp); "none" (default): latentbench's defaults.
+    std::string recipe = "none";
     /// `seeds = [...]`: every method whose fit depends on a seed (Method::set_seed) is
     /// fitted and rolled out once per seed, and the tables give statistics over the
     /// seeds. Empty: once, with the method's own seed.

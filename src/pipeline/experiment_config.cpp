@@ -14,6 +14,7 @@
 
 #include "eval/rollout.hpp"
 #include "io/toml_config.hpp"
+#include "paper/paper_recipe.hpp"
 #include "pipeline/experiment.hpp"
 
 namespace lb {
@@ -25,15 +26,20 @@ std::string resolve(const std::string& path, const std::string& base)
 {
     if (fs::path(path).is_absolute()) return path;
     if (fs::exists(fs::path(base) / path)) return (fs::path(base) / path).string();
+    // A published suite's experiment.toml (results/<suite>/) names its scenes relative to
+    // experiments/, where its suite file was.
+    const fs::path in_experiments = fs::path(LB_SOURCE_DIR) / "experiments" / path;
+    if (!fs::exists(fs::path(LB_SOURCE_DIR) / path) && fs::exists(in_experiments)) return in_experiments.string();
     return (fs::path(LB_SOURCE_DIR) / path).string();
 }
 
-void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
+void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given, bool& hidden_given)
 {
     if (t.has("latent")) {
         o.latent_dim = Index(t.get_int("latent", 0, 1, kMaxWidth));
         latent_given = true;
     }
+    hidden_given = hidden_given || t.has("hidden");
     o.hidden = t.get_widths("hidden", o.hidden);
     o.pca_dim = Index(t.get_int("pca", o.pca_dim, 0, kMaxWidth));
     o.epochs = t.get_count("epochs", o.epochs, 1, kMaxEpochs);
@@ -48,6 +54,13 @@ void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given)
             o.frame = parse_encoding_frame(t.get_string("frame", ""));
         } catch (const ConfigError& e) {
             t.fail("frame", e.what());
+        }
+    }
+    if (t.has("autoencoder_frames")) {
+        try {
+            o.frames_seen = autoencoder_frames_from_string(t.get_string("autoencoder_frames", ""));
+        } catch (const ConfigError& e) {
+            t.fail("autoencoder_frames", e.what());
         }
     }
     o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
@@ -94,7 +107,7 @@ std::vector<ConfigTable> method_entries(ConfigTable& cfg, std::set<std::string>&
 /// One scene: its autoencoder settings and every method parsed over the merged
 /// [training] defaults (suite-wide, then the scene's [scenes.training]).
 SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOptions& ae_defaults,
-                     bool latent_default_given, const toml::table* training, const std::vector<ConfigTable>& entries,
+                     bool latent_default_given, bool hidden_default_given, const toml::table* training, const std::vector<ConfigTable>& entries,
                      const MethodRegistry& registry, const std::string& source,
                      const std::vector<std::uint64_t>& suite_seeds)
 {
@@ -106,7 +119,8 @@ SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOp
     if (!is_safe_name(sc.label)) s.fail("label", std::string(kSafeNameRule) + " (got '" + sc.label + "')");
     sc.autoencoder = ae_defaults;
     sc.latent_given = latent_default_given;
-    if (auto t = s.table("autoencoder")) read_autoencoder(*t, sc.autoencoder, sc.latent_given);
+    sc.hidden_given = hidden_default_given;
+    if (auto t = s.table("autoencoder")) read_autoencoder(*t, sc.autoencoder, sc.latent_given, sc.hidden_given);
     toml::table merged = training ? *training : toml::table{};
     std::optional<ConfigTable> scene_training = s.table("training");
     if (scene_training) {
@@ -200,15 +214,20 @@ ExperimentConfig parse_experiment(const toml::table& root, const std::string& pa
     }
     if (cfg.has("seeds") && ex.seeds.empty()) cfg.fail("seeds", "list at least one seed (or leave the key out)");
 
+    ex.recipe = cfg.get_string("recipe", ex.recipe);
+    if (ex.recipe != "paper" && ex.recipe != "none")
+        cfg.fail("recipe", "unknown recipe '" + ex.recipe + "' (paper: the settings Li et al. 2025 state; none: "
+                           "latentbench's defaults)");
     AutoencoderOptions ae_defaults;
-    bool latent_default_given = false;
-    if (auto t = cfg.table("autoencoder")) read_autoencoder(*t, ae_defaults, latent_default_given);
+    bool latent_default_given = false, hidden_default_given = false;
+    if (auto t = cfg.table("autoencoder")) read_autoencoder(*t, ae_defaults, latent_default_given, hidden_default_given);
     if (auto t = cfg.table("training")) t->accept_all();  // read by the methods, checked per scene
     std::set<std::string> names;
     const std::vector<ConfigTable> entries = method_entries(cfg, names);
     for (ConfigTable s : cfg.table_array("scenes")) {
-        ex.scenes.push_back(read_scene(s, base, ae_defaults, latent_default_given, cfg.raw_table("training"), entries,
-                                       registry, path, ex.seeds));
+        ex.scenes.push_back(read_scene(s, base, ae_defaults, latent_default_given, hidden_default_given,
+                                       cfg.raw_table("training"), entries, registry, path, ex.seeds));
+        ex.scenes.back().recipe = ex.recipe;
     }
     if (ex.scenes.empty()) cfg.fail("scenes", "at least one [[scenes]] entry is required");
 
@@ -235,25 +254,6 @@ ExperimentConfig parse_experiment(const toml::table& root, const std::string& pa
     for (ConfigTable a : cfg.table_array("ablations")) ex.ablations.push_back(read_ablation(a, names));
     cfg.finish();
     return ex;
-}
-
-std::string value_text(const toml::node& value)
-{
-    if (const auto* f = value.as_floating_point()) {
-        // The shortest text that reads back as the same double: "0.1", not "0.10000000000000001".
-        const double v = f->get();
-        char text[40];
-        for (int digits = 1; digits <= 17; ++digits) {
-            std::snprintf(text, sizeof text, "%.*g", digits, v);
-            if (std::strtod(text, nullptr) == v) break;
-        }
-        std::string out = text;
-        if (out.find_first_of(".eni") == std::string::npos) out += ".0";
-        return out;
-    }
-    std::ostringstream out;
-    value.visit([&](const auto& v) { out << v; });
-    return out.str();
 }
 
 /// The [sweep] axes: dotted keys (quoted, "training.noise_fraction", or as nested
@@ -283,8 +283,8 @@ void read_sweep_axes(const toml::table& table, const std::string& prefix, const 
         axis.key = key;
         for (const toml::node& v : *list) {
             if (key == "seeds" && !(v.is_integer() && v.as_integer()->get() >= 0))
-                fail("seeds are integers >= 0 (got " + value_text(v) + ")");
-            const std::string text = value_text(v);
+                fail("seeds are integers >= 0 (got " + toml_value_text(v) + ")");
+            const std::string text = toml_value_text(v);
             if (std::find(axis.values.begin(), axis.values.end(), text) != axis.values.end())
                 fail("duplicate value " + text);
             axis.values.push_back(text);
@@ -416,11 +416,30 @@ void expand_sweep(const toml::table& root, const std::string& path, const Method
     }
 }
 
+/// `recipe = "paper": the paper's stated [autoencoder] and [training] values for every key
+/// the suite does not set (the per-scene widths and latent sizes resolve per scene).
+toml::table with_recipe(toml::table root, const std::string& path)
+{
+    const toml::node* recipe = root.get("recipe");
+    if (!recipe || recipe->value_or(std::string()) != "paper") return root;  // parse_experiment checks the value
+    for (const char* section : {"autoencoder", "training"}) {
+        if (!root.contains(section)) root.insert(section, toml::table{});
+        toml::table* t = root.get_as<toml::table>(section);
+        if (!t) throw ConfigError(path + ": key '" + section + "': must be a table");
+        for (const RecipeSetting& s : paper_recipe_suite_defaults(section)) {
+            if (t->contains(s.key)) continue;
+            toml::table parsed = toml::parse("v = " + s.paper);
+            parsed.get("v")->visit([&](const auto& value) { t->insert(s.key, value); });
+        }
+    }
+    return root;
+}
+
 } // namespace
 
 ExperimentConfig load_experiment(const std::string& path, const MethodRegistry& registry)
 {
-    const toml::table root = parse_toml_file(path);
+    const toml::table root = with_recipe(parse_toml_file(path), path);
     toml::table base = root;
     base.erase("sweep");
     ExperimentConfig ex = parse_experiment(base, path, registry);

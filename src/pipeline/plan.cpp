@@ -12,6 +12,7 @@
 #include "core/parse.hpp"
 #include "eval/rollout.hpp"
 #include "methods/full_space/full_space_method.hpp"
+#include "paper/paper_recipe.hpp"
 #include "paper/scene_defaults.hpp"
 #include "scene/scene.hpp"
 
@@ -32,6 +33,10 @@ AutoencoderOptions resolved_autoencoder(const SceneSpec& spec, const Scene& scen
 {
     AutoencoderOptions ao = spec.autoencoder;
     if (!spec.latent_given) ao.latent_dim = default_latent_dim(scene.name);
+    if (spec.recipe == "paper" && !spec.hidden_given) {
+        const std::vector<long long> hidden = paper_autoencoder_hidden(scene.name);
+        if (!hidden.empty()) ao.hidden.assign(hidden.begin(), hidden.end());
+    }
     return ao;
 }
 
@@ -44,6 +49,10 @@ std::string autoencoder_stage_key(const std::string& sim_key, const AutoencoderO
     s << o.latent_dim << "|" << format_list(o.hidden) << "|" << o.pca_dim << "|" << o.batch_norm << o.residual << "|"
       << o.epochs << "|" << o.batch_size << "|" << o.learning_rate << "|" << o.validation_fraction << "|" << o.patience
       << "|" << o.seed;
+    // Since issue 39 the PCA layer is clamped to the training data's numerical rank: an
+    // autoencoder cached before then may hold zero-variance completion columns.
+    s << "|pca<=rank";
+    if (o.frames_seen != AutoencoderFrames::train) s << "|frames=" << to_string(o.frames_seen);  // older keys unchanged
     if (o.frame != EncodingFrame::translation) s << "|frame=" << encoding_frame_name(o.frame);  // older keys unchanged
     if (o.physics_epochs > 0)
         s << "|physics=" << o.physics_epochs << "," << o.physics_weight << "," << o.physics_learning_rate << ","

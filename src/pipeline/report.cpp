@@ -9,6 +9,9 @@
 #include "eval/summary_schema.hpp"
 #include "io/table.hpp"
 #include "paper/paper_numbers.hpp"
+#include "pipeline/deviations.hpp"
+#include "pipeline/plan.hpp"
+#include "scene/scene.hpp"
 
 namespace lb {
 
@@ -240,6 +243,12 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
     std::vector<std::string> written;
     auto emit = [&](const Table& t, const std::string& stem) { written.push_back(write_table_files(t, dir + "/" + stem).front()); };
     for (const SceneResult& r : scenes) {
+        // The deviations from the paper's recipe, from the resolved settings (issue 39).
+        for (const SceneSpec& spec : ex.scenes) {
+            if (spec.label != r.label) continue;
+            const Scene scene = load_scene(spec.scene_path, {spec.variant});
+            emit(deviations_table(ex, spec, scene.name, resolved_autoencoder(spec, scene)), "deviations_" + r.label);
+        }
         Table methods = comparison_table(r, {}, "Methods on " + r.label);
         const Table embeddings = embedding_table(r);
         if (!embeddings.rows.empty()) {

@@ -149,7 +149,7 @@ public:
         }
         r.dataset_step_ms = 1e3 * median_of(steps);
         r.latent = ls.ae->latent_dim();
-        const AutoencoderOptions& ao = ls.ae_options;
+        const AutoencoderOptions& ao = ls.ae->options();  // as trained: the PCA width after clamping
         r.decoder_layers = format_list(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
         r.jvp_ms = measure_jvp_ms(*ls.ae);
         for (const PlannedRow& row : m_plan.rows) {

@@ -126,7 +126,7 @@ TEST(Autoencoder, PcaLayersReproduceDataOfRankAtMostPcaDim)
     const MatrixXd X = (modes * random_matrix(4, 30, rng)).colwise() + rest;
     const MatrixXd F = ae.encoding().to_features(X);
     EXPECT_NEAR(ae.initialize_pca(F), 1.0, 1e-12);  // explained variance
-    EXPECT_EQ(ae.options().pca_dim, 6);
+    EXPECT_EQ(ae.options().pca_dim, 4);  // clamped to the data's rank (issue 39)
 
     auto& enc_pca = ae.encoder().layer(0);
     auto& dec_pca = ae.decoder().layer(ae.decoder().size() - 1);
@@ -139,7 +139,41 @@ TEST(Autoencoder, PcaLayersReproduceDataOfRankAtMostPcaDim)
     const auto& W_enc = dynamic_cast<nn::Linear&>(enc_pca).weight();
     const auto& W_dec = dynamic_cast<nn::Linear&>(dec_pca).weight();
     EXPECT_EQ(MatrixXd(W_enc.transpose()), W_dec);
-    EXPECT_LE((W_enc * W_dec - MatrixXd::Identity(6, 6)).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LE((W_enc * W_dec - MatrixXd::Identity(4, 4)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(Autoencoder, PcaLayerNeverWiderThanTheDataSoConstantOffsetsStayExact)
+{
+    // Issue 39: frames whose Dirichlet corners translate rigidly together (their offsets
+    // from the Dirichlet centroid are constant) plus 3 modes that vanish on them. The
+    // features have rank 3 < pca_dim 6: the PCA layer must be 3 wide, and then any latent,
+    // through the untrained (random) network, decodes the Dirichlet vertices exactly onto
+    // their targets. With zero-variance completion columns (the old layer) the random
+    // network's output reaches them and moves the corners by centimetres.
+    const PhysicsSpec p = latent_test::cloth_physics();
+    Autoencoder ae(p, tiny_options(), 0);  // pca_dim 6
+    Rng rng(21);
+    const VectorXd rest = flatten(p.mesh.rest_positions);
+    MatrixXd modes = random_matrix(rest.size(), 3, rng, -0.2, 0.2);
+    for (int b : p.bc_indices) modes.middleRows<3>(3 * Index(b)).setZero();
+    MatrixXd X = (modes * random_matrix(3, 40, rng)).colwise() + rest;
+    for (Index s = 0; s < X.cols(); ++s) {
+        const Vector3d shift = random_matrix(3, 1, rng, -1.0, 1.0).col(0);
+        for (Index v = 0; v < X.rows() / 3; ++v) X.block<3, 1>(3 * v, s) += shift;
+    }
+    ae.initialize_pca(ae.encoding().to_features(X));
+    EXPECT_EQ(ae.options().pca_dim, 3);
+    EXPECT_EQ(ae.decoder().layer(ae.decoder().size() - 1).in_features(), 3);
+
+    const MatrixXd Z = random_matrix(3, 25, rng, -50.0, 50.0);  // far outside any data
+    const MatrixXd targets = targets_of(X.leftCols(25), p.bc_indices);
+    const MatrixXd decoded = ae.decode(Z, targets);
+    double worst = 0.0;
+    for (size_t b = 0; b < p.bc_indices.size(); ++b)
+        worst = std::max(worst, (decoded.middleRows<3>(3 * Index(p.bc_indices[b])) - targets.middleRows<3>(3 * Index(b)))
+                                    .cwiseAbs()
+                                    .maxCoeff());
+    EXPECT_LE(worst, 1e-9) << "decoded Dirichlet vertices off their targets by " << worst << " m";
 }
 
 TEST(Autoencoder, PcaDimIsClampedToFramesMinusOne)

@@ -62,6 +62,7 @@ TEST(Pca, ReproducesDataOfRankAtMostDim)
             EXPECT_LE((project(p, X) - X).cwiseAbs().maxCoeff(), 1e-11) << F << "x" << S << ", d = " << d;
             EXPECT_LE((p.basis.transpose() * p.basis - MatrixXd::Identity(d, d)).cwiseAbs().maxCoeff(), 1e-12);
             EXPECT_NEAR(p.explained_fraction(), 1.0, 1e-12);
+            EXPECT_EQ(p.rank, 5) << F << "x" << S << ", d = " << d;  // of the data, whatever d
             for (Index i = 5; i < d; ++i) EXPECT_LE(p.variances(i), 1e-14 * p.variances(0));  // round-off only
         }
     }

@@ -36,6 +36,7 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
     o.learning_rate = t.get_double("learning_rate", o.learning_rate);
     o.max_seconds = t.get_double("max_seconds", o.max_seconds);
     o.noise_fraction = t.get_double("noise_fraction", o.noise_fraction);
+    o.noise_draw = get_choice(t, "noise_draw", o.noise_draw, noise_draw_from_string);
     o.balancing_floor = t.get_double("balancing_floor", o.balancing_floor);
     o.balancing_velocity = get_choice(t, "balancing_velocity", o.balancing_velocity, balancing_velocity_from_string);
     o.penalty_weight = t.get_double("penalty_weight", o.penalty_weight);
@@ -83,6 +84,9 @@ public:
         t.insert_or_assign("learning_rate", o.learning_rate);
         t.insert_or_assign("noise", o.training_noise);
         t.insert_or_assign("noise_fraction", o.noise_fraction);
+        // Only when not the default: the text is the cache key of fits made before the option.
+        if (o.training_noise && o.noise_draw != NoiseDraw::Independent)
+            t.insert_or_assign("noise_draw", to_string(o.noise_draw));
         if (o.loss == IntegratorLoss::SelfSupervised) {  // the supervised loss has no balancing
             t.insert_or_assign("balancing", o.data_balancing);
             t.insert_or_assign("balancing_floor", o.balancing_floor);
