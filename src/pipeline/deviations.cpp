@@ -79,6 +79,11 @@ toml::table integrator_values(const Method& method)
 std::string shown(const toml::node& value)
 {
     if (const auto* text = value.as_string()) return text->get();
+    if (const auto* list = value.as_array()) {
+        std::string out = "[";
+        for (size_t i = 0; i < list->size(); ++i) out += (i ? ", " : "") + shown(*list->get(i));
+        return out + "]";
+    }
     return toml_value_text(value);
 }
 

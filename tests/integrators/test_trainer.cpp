@@ -158,6 +158,40 @@ TEST(TrainingNoise, DoublesTheBatchWithBoundedLatentNoise)
     EXPECT_EQ(plain.make_batch(p.samples, idx, rng).size(), n);
 }
 
+TEST(TrainingNoise, SharedDrawPerturbsBothLatentsByTheSameUniformSample)
+{
+    // Issue 39: noise_draw = "shared" uses one U(-1, 1) draw per sample and component for
+    // z_{t-1} and z_{t-2}, each scaled by its own latent's batch std; "independent" one each.
+    TinyProblem p;
+    const std::vector<Index> idx = all_indices(std::min<Index>(p.samples.size(), 12));
+    const Index n = Index(idx.size());
+    // The unit draws u = (z_noisy − z) / (0.1 std) of one input latent over the batch.
+    auto unit_draws = [&](Eigen::Ref<const MatrixXd> z) {
+        const MatrixXd clean = z.leftCols(n);
+        const VectorXd mean = clean.rowwise().mean();
+        const VectorXd std = ((clean.colwise() - mean).array().square().rowwise().sum() / double(n)).sqrt();
+        return MatrixXd((z.rightCols(n) - clean).array().colwise() / (0.1 * std).array());
+    };
+    for (const NoiseDraw draw : {NoiseDraw::Shared, NoiseDraw::Independent}) {
+        IntegratorTrainOptions o;
+        o.training_noise = true;
+        o.noise_draw = draw;
+        IntegratorTrainer trainer(*p.model, *p.ae, o);
+        Rng rng(9);
+        const IntegratorBatch b = trainer.make_batch(p.samples, idx, rng);
+        const MatrixXd u1 = unit_draws(b.z_prev()), u2 = unit_draws(b.z_prev2());
+        EXPECT_LE(u1.cwiseAbs().maxCoeff(), 1.0 + 1e-9);
+        EXPECT_LE(u2.cwiseAbs().maxCoeff(), 1.0 + 1e-9);
+        EXPECT_GT(u1.cwiseAbs().maxCoeff(), 0.1);  // there is noise
+        if (draw == NoiseDraw::Shared)
+            EXPECT_LE((u1 - u2).cwiseAbs().maxCoeff(), 1e-9) << to_string(draw);
+        else
+            EXPECT_GT((u1 - u2).cwiseAbs().maxCoeff(), 0.1) << to_string(draw);
+    }
+    EXPECT_EQ(noise_draw_from_string("shared"), NoiseDraw::Shared);
+    EXPECT_THROW(noise_draw_from_string("same"), ConfigError);
+}
+
 TEST(DataBalancing, DividesEachSampleByItsMeanVelocity)
 {
     TinyProblem p;
