@@ -13,6 +13,7 @@
 #include "baselines/builtin_methods.hpp"
 #include "pipeline/experiment.hpp"
 #include "pipeline/plan.hpp"
+#include "support/cli_runner.hpp"
 
 namespace lb {
 namespace {
@@ -21,11 +22,7 @@ namespace fs = std::filesystem;
 
 std::string write_experiment(const std::string& name, const std::string& text)
 {
-    const fs::path dir = fs::path(LB_TEST_TMP_DIR) / ("experiment_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    std::ofstream(dir / "suite.toml") << text;
-    return (dir / "suite.toml").string();
+    return testing::write_in_fresh_dir("experiment_" + name, "suite.toml", text);
 }
 
 const char* kTiny = R"(

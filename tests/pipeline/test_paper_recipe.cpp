@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
 
 #include "baselines/builtin_methods.hpp"
 #include "core/error.hpp"
@@ -13,6 +12,7 @@
 #include "pipeline/experiment.hpp"
 #include "pipeline/plan.hpp"
 #include "scene/scene.hpp"
+#include "support/cli_runner.hpp"
 
 namespace lb {
 namespace {
@@ -21,11 +21,7 @@ namespace fs = std::filesystem;
 
 std::string write_suite(const std::string& name, const std::string& text)
 {
-    const fs::path dir = fs::path(LB_TEST_TMP_DIR) / ("recipe_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    std::ofstream(dir / "suite.toml") << text;
-    return (dir / "suite.toml").string();
+    return testing::write_in_fresh_dir("recipe_" + name, "suite.toml", text);
 }
 
 const char* kPaperSuite = R"(

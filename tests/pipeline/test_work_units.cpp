@@ -21,6 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::fresh_dir;
+using testing::write_in_fresh_dir;
 using testing::run_cli;
 using testing::run_program;
 
@@ -57,9 +58,7 @@ seeds = [3, 4]
 
 std::string write_suite(const std::string& name, const std::string& text)
 {
-    const std::string dir = fresh_dir("units_" + name);
-    std::ofstream(dir + "/suite.toml") << text;
-    return dir + "/suite.toml";
+    return write_in_fresh_dir("units_" + name, "suite.toml", text);
 }
 
 std::string read_all(const std::string& path)

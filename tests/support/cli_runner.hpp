@@ -56,4 +56,12 @@ inline void write_file(const std::string& path, const std::string& text)
     std::ofstream(path) << text;
 }
 
+/// `text` as `file` in the fresh directory `dir` (fresh_dir); returns the file's path.
+inline std::string write_in_fresh_dir(const std::string& dir, const std::string& file, const std::string& text)
+{
+    const std::string path = fresh_dir(dir) + "/" + file;
+    write_file(path, text);
+    return path;
+}
+
 } // namespace lb::testing
