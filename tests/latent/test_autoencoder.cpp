@@ -572,6 +572,21 @@ TEST(AutoencoderTraining, HandlesAHandfulOfFrames)
     EXPECT_TRUE(std::isfinite(s.validation_relative_rmse));
 }
 
+TEST(AutoencoderTraining, FramesSeenAreTheTrainingWindowOrEveryFrame)
+{
+    // Issue 39's autoencoder_frames: "train" (default) takes the frames before each sequence's
+    // train_frames, "all" every frame, in order.
+    Dataset data = latent_test::small_cloth_prefix(20);
+    data.sequences.front().train_frames = 12;
+    const FrameSet train = training_frames(data), all = training_frames(data, AutoencoderFrames::all);
+    ASSERT_EQ(train.positions.cols(), 12);
+    ASSERT_EQ(all.positions.cols(), 20);
+    EXPECT_EQ(all.positions.leftCols(12), train.positions);
+    EXPECT_EQ(all.positions.col(19), data.sequences.front().positions.row(19).transpose());
+    EXPECT_EQ(autoencoder_frames_from_string("all"), AutoencoderFrames::all);
+    EXPECT_THROW(autoencoder_frames_from_string("test"), ConfigError);
+}
+
 TEST(AutoencoderTraining, RejectsBadOptionsAndMismatchedData)
 {
     const Dataset data = latent_test::small_cloth_prefix(20);
