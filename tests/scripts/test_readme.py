@@ -55,7 +55,10 @@ def code_text(markdown):
     for m in fence.finditer(markdown):
         pieces.append(m.group(1))
     prose = fence.sub("", markdown)
-    pieces += [a or b for a, b in re.findall(r"``(.+?)``|`([^`\n]+)`", prose)]
+    # A span may continue on the next line (Markdown reads the line break as a space), not
+    # across a blank line.
+    spans = re.findall(r"``((?:[^`]|`(?!`))+?)``|`((?:[^`\n]|\n(?!\n))+)`", prose)
+    pieces += [" ".join((a or b).split()) for a, b in spans]
     return pieces
 
 
