@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """README.md stays a guide that matches the binary: it is under 30,000 bytes; every
 `latentbench <subcommand>` it shows in code exists in `latentbench --help`; every long option
-that `latentbench --help` and `latentbench <subcommand> --help` print appears in it; it names no
-issue numbers; and the repository files it names in code exist. Run by ctest (label unit):
+that `latentbench --help` and `latentbench <subcommand> --help` print appears in it, as do the
+options of the user-facing scripts and every `scripts/run` command; it names no issue numbers;
+and the repository files it names in code exist. Run by ctest (label unit):
 
   /usr/bin/python3 tests/scripts/test_readme.py --cli build/latentbench --tmp build/tests/tmp
 """
@@ -18,6 +19,7 @@ REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 README = REPO / "README.md"
 MAX_BYTES = 30_000
 ARGS = None
+SCRIPTS = ("scripts/run_local.py", "scripts/plot_video.py", "scripts/export_rollout.py")
 
 # A long option as CLI11 prints it (`--max-frames`, `-o,--output`), not followed by more name.
 LONG_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*(?![\w-])")
@@ -111,6 +113,23 @@ class Readme(unittest.TestCase):
                 if option != "--help" and option not in documented:
                     missing.append(f"{source} {option}")
         self.assertEqual(missing, [], "options printed by --help but absent from README.md")
+
+    def test_every_script_option_is_documented(self):
+        # The user-facing scripts' argparse options, read from their source (running them
+        # would need matplotlib, meshio or ffmpeg), and the commands of scripts/run.
+        documented = set(LONG_OPTION.findall(self.text))
+        missing = []
+        for script in SCRIPTS:
+            source = (REPO / script).read_text(encoding="utf-8")
+            options = re.findall(r"add_argument\((?:\s*\"-\w\",)?\s*\"(--[a-z][a-z0-9-]*)\"", source)
+            self.assertTrue(options, f"no argparse options found in {script}")
+            missing += [f"{script} {o}" for o in sorted(set(options)) if o not in documented]
+        run_script = (REPO / "scripts" / "run").read_text(encoding="utf-8")
+        commands = re.findall(r"^  ([a-z][a-z-]*)\)", run_script, re.M)
+        self.assertIn("quickstart", commands)
+        missing += [f"scripts/run {c}" for c in commands
+                    if not re.search(rf"scripts/run {re.escape(c)}(?![\w-])", self.text)]
+        self.assertEqual(missing, [], "script options or commands absent from README.md")
 
     def test_no_issue_numbers(self):
         hits = [f"line {self.text.count(chr(10), 0, m.start()) + 1}: {m.group(0)!r}"
