@@ -145,6 +145,8 @@ class Readme(unittest.TestCase):
                 token = token.rstrip(".")
                 if not token.startswith(roots) or any(c in token for c in "<*{$"):
                     continue
+                if any(re.fullmatch(r"[A-Z][A-Z_]*", part) for part in token.split("/")):
+                    continue  # a placeholder such as results/NAME/
                 if not (REPO / token).exists():
                     missing.add(token)
         # Outputs of commands, not files in the repository.
