@@ -131,6 +131,15 @@ class Readme(unittest.TestCase):
                     if not re.search(rf"scripts/run {re.escape(c)}(?![\w-])", self.text)]
         self.assertEqual(missing, [], "script options or commands absent from README.md")
 
+    def test_links_within_the_readme_resolve(self):
+        prose = re.sub(r"^```.*?^```", "", self.text, flags=re.S | re.M)
+        anchors = set()
+        for heading in re.findall(r"^#{1,6} (.+)$", prose, re.M):
+            # GitHub's anchors: lower case, punctuation dropped, spaces to hyphens.
+            anchors.add(re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-"))
+        broken = sorted(set(re.findall(r"\]\(#([^)]+)\)", prose)) - anchors)
+        self.assertEqual(broken, [], f"links to headings that do not exist ({sorted(anchors)})")
+
     def test_no_issue_numbers(self):
         hits = [f"line {self.text.count(chr(10), 0, m.start()) + 1}: {m.group(0)!r}"
                 for m in ISSUE_NUMBER.finditer(self.text)]
