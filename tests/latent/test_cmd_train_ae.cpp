@@ -121,7 +121,7 @@ TEST(TrainAeCli, BadInputFailsCleanly)
         {"train-ae " + dir + "/missing.h5 -o " + out, "missing.h5"},
         {"train-ae " + data + " -o " + out + " --hidden 16,0", "--hidden"},
         {"train-ae " + data + " -o " + out + " --batch 1", "--batch"},
-        {"train-ae " + data + " -o " + out + " --lr -1", "learning_rate"},
+        {"train-ae " + data + " -o " + out + " --lr -1", "--lr: must lie in (0, ∞), got -1"},
     };
     for (const auto& c : cases) {
         const auto r = run_cli(c.args);
