@@ -1,6 +1,7 @@
 // `latentbench train-ae` end to end: a trained file that loads, the summary line,
 // resuming from a checkpoint, and bad input (message, exit 1, no output file).
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <filesystem>
 #include <fstream>
@@ -77,8 +78,10 @@ TEST(TrainAeCli, CheckpointOfTheOtherTrainerIsRefusedAndLeftInPlace)
     const std::string data = dir + "/cloth.h5", ae = dir + "/ae.h5";
     const std::string ae_ckpt = dir + "/ae.checkpoint.h5", fit_ckpt = dir + "/fit.checkpoint.h5";
     save_dataset(latent_test::small_cloth_prefix(40), data);
-    const std::string train_ae = "train-ae " + data + " -o " + ae + " --hidden 8 --pca 4 --batch 16 --epochs 2";
-    auto r = run_cli(train_ae + " --checkpoint " + ae_ckpt);
+    const auto train_ae = [&](const std::string& out) {
+        return "train-ae " + data + " -o " + out + " --hidden 8 --pca 4 --batch 16 --epochs 2";
+    };
+    auto r = run_cli(train_ae(ae) + " --checkpoint " + ae_ckpt);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::string fit = "fit --method latent_mlp " + data + " --ae " + ae + " -o " + dir +
                             "/mlp.h5 --set epochs=1 --set hidden=[8] --set batch=64";
@@ -93,7 +96,7 @@ TEST(TrainAeCli, CheckpointOfTheOtherTrainerIsRefusedAndLeftInPlace)
         std::string args, checkpoint, output;
     };
     for (const Case& c : {Case{fit + " --checkpoint " + ae_ckpt, ae_ckpt, dir + "/mlp.h5"},
-                          Case{train_ae + " --checkpoint " + fit_ckpt, fit_ckpt, ae}}) {
+                          Case{train_ae(dir + "/ae2.h5") + " --checkpoint " + fit_ckpt, fit_ckpt, dir + "/ae2.h5"}}) {
         const std::string before = bytes(c.checkpoint);
         fs::remove(c.output);
         r = run_cli(c.args);
@@ -106,6 +109,21 @@ TEST(TrainAeCli, CheckpointOfTheOtherTrainerIsRefusedAndLeftInPlace)
         EXPECT_FALSE(fs::exists(c.checkpoint + ".stale")) << r.output;
         EXPECT_FALSE(fs::exists(c.output)) << c.args;
     }
+    // A checkpoint written before the trainer was recorded: its fingerprint's parts tell.
+    const std::string legacy = dir + "/legacy.checkpoint.h5";
+    fs::copy_file(ae_ckpt, legacy);
+    {
+        const hid_t file = H5Fopen(legacy.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+        ASSERT_GE(file, 0);
+        EXPECT_GE(H5Adelete_by_name(file, "/", "trainer", H5P_DEFAULT), 0);
+        H5Fclose(file);
+    }
+    const std::string before = bytes(legacy);
+    r = run_cli(fit + " --checkpoint " + legacy);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("another trainer"), std::string::npos) << r.output;
+    EXPECT_EQ(bytes(legacy), before);
+    EXPECT_FALSE(fs::exists(legacy + ".stale.1"));
 }
 
 TEST(TrainAeCli, BadInputFailsCleanly)
