@@ -93,12 +93,25 @@ LinearPcaSubspace LinearPcaSubspace::load(const h5::File& f, const PhysicsSpec& 
     s.pca.variances = f.read_vector("linear_pca.variances");
     s.pca.total_variance = f.attribute_double("/", "linear_pca.total_variance");
     const Index F = BcRelativeEncoding(physics).num_features();
-    if (s.pca.mean.size() != F || s.pca.basis.rows() != F || s.pca.variances.size() != s.pca.basis.cols() ||
-        s.pca.basis.cols() < 1)
-        throw IoError(path + ": linear_pca shapes (mean " + std::to_string(s.pca.mean.size()) + ", basis " +
-                      std::to_string(s.pca.basis.rows()) + "×" + std::to_string(s.pca.basis.cols()) +
-                      ") do not match the scene's " + std::to_string(F) + " features");
-    if (!s.pca.basis.allFinite() || !s.pca.mean.allFinite()) throw IoError(path + ": linear_pca basis is not finite");
+    // Each dataset on its own, so that the message names the one that is wrong.
+    const auto fail = [&](const std::string& name, const std::string& problem) {
+        throw IoError(path + ": dataset 'linear_pca." + name + "' " + problem);
+    };
+    if (s.pca.mean.size() != F)
+        fail("mean", "has " + std::to_string(s.pca.mean.size()) + " entries; the scene has " + std::to_string(F) +
+                         " features");
+    if (s.pca.basis.rows() != F || s.pca.basis.cols() < 1)
+        fail("basis", "is " + std::to_string(s.pca.basis.rows()) + "×" + std::to_string(s.pca.basis.cols()) +
+                          "; expected " + std::to_string(F) + " rows (the scene's features) and at least one column");
+    if (s.pca.variances.size() != s.pca.basis.cols())
+        fail("variances", "has " + std::to_string(s.pca.variances.size()) + " entries for the " +
+                              std::to_string(s.pca.basis.cols()) + " columns of 'linear_pca.basis'");
+    if (!s.pca.mean.allFinite()) fail("mean", "holds non-finite values (NaN or inf)");
+    if (!s.pca.basis.allFinite()) fail("basis", "holds non-finite values (NaN or inf)");
+    if (!s.pca.variances.allFinite() || (s.pca.variances.array() < 0.0).any())
+        fail("variances", "holds values that are not finite and ≥ 0 (NaN, inf or negative)");
+    if (!std::isfinite(s.pca.total_variance) || s.pca.total_variance < 0.0)
+        throw IoError(path + ": attribute 'linear_pca.total_variance' is not finite and ≥ 0");
     return s;
 }
 

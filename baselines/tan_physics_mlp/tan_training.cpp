@@ -108,6 +108,7 @@ nn::TrainingLoopOptions loop_options(const TanOptions& o, int stage, int epochs,
     static_cast<nn::TrainingRunOptions&>(loop) = o;
     loop.checkpoint_path = std::move(checkpoint);
     loop.label = "tan stage " + std::to_string(stage);
+    loop.trainer = "tan_physics_mlp stage " + std::to_string(stage);
     loop.epochs = epochs;
     loop.batch_size = o.batch_size;
     loop.learning_rate = lr;

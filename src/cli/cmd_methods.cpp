@@ -114,7 +114,12 @@ void register_fit(CLI::App& app)
         MethodInputs in = command_line_inputs(data, model, *method, a->ae, "fit");
         in.checkpoint_path = a->checkpoint;
         method->resolve({data.scene_name, scene_latent(in, data)});
-        fit_artefact(*method, in, data.scene_name, a->output, method->options_text());
+        try {
+            fit_artefact(*method, in, data.scene_name, a->output, method->options_text());
+        } catch (const NumericalError& e) {  // name the inputs: the message knows epoch and sample only
+            throw NumericalError("fit --method " + a->method + " on '" + a->data + "'" +
+                                 (a->ae.empty() ? "" : " with --ae '" + a->ae + "'") + ": " + e.what());
+        }
         std::printf("wrote %s: %s (%s)\n", a->output.c_str(), method->method_name().c_str(), method->summary().c_str());
     });
 }

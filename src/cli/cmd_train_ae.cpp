@@ -3,20 +3,31 @@
 #include "paper/scene_defaults.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
-#include "core/limits.hpp"
 #include "core/log.hpp"
 #include "io/atomic_file.hpp"
 #include "latent/autoencoder.hpp"
+#include "latent/autoencoder_option_table.hpp"
 #include "sim/dataset.hpp"
 
 namespace lb::cli {
+
+namespace {
+
+/// The range of `flag` from the option table the suite reader also checks against.
+CLI::Validator table_range(const char* flag)
+{
+    const AutoencoderOptionSpec& spec = autoencoder_option_by_flag(flag);
+    return CLI::Validator([&spec](std::string& text) { return spec.text_problem(text); }, spec.range_text());
+}
+
+} // namespace
 
 void register_train_ae(CLI::App& app)
 {
     struct Args {
         std::string data;
         std::string output;
-        long latent = 0;  // 0: the scene's default
+        long latent = 0;  // 0 (not given): the scene's default
         int epochs = AutoencoderOptions{}.epochs;
         int batch = AutoencoderOptions{}.batch_size;
         double lr = AutoencoderOptions{}.learning_rate;
@@ -38,27 +49,31 @@ void register_train_ae(CLI::App& app)
     cmd->add_option("-o,--output", args->output, "Output autoencoder HDF5 file")->required();
     cmd->add_option("--latent", args->latent,
                     "Latent dimension (default per scene: rods 4, cloth 4, armadillo 12, bunny_ears 8, cantilever 4)")
-        ->check(CLI::Range(0L, long(kMaxWidth)));
+        ->check(table_range("--latent"));
     cmd->add_option("--epochs", args->epochs, "Epochs (total, including resumed ones)")
         ->capture_default_str()
-        ->check(CLI::Range(1, kMaxEpochs));
-    cmd->add_option("--batch", args->batch, "Mini-batch size")->capture_default_str()->check(CLI::Range(2, kMaxBatch));
-    cmd->add_option("--lr", args->lr, "Adam learning rate")->capture_default_str();
+        ->check(table_range("--epochs"));
+    cmd->add_option("--batch", args->batch, "Mini-batch size")->capture_default_str()->check(table_range("--batch"));
+    cmd->add_option("--lr", args->lr, "Adam learning rate")->capture_default_str()->check(table_range("--lr"));
     cmd->add_option("--pca", args->pca, "Width of the PCA layers (clamped to frames − 1 and features; 0: none)")
         ->capture_default_str()
-        ->check(CLI::Range(0L, long(kMaxWidth)));
+        ->check(table_range("--pca"));
     cmd->add_option("--hidden", args->hidden, "Decoder hidden widths after the latent; the encoder mirrors them")->capture_default_str();
-    cmd->add_option("--seed", args->seed, "Seed of the initialisation and the shuffling")->capture_default_str();
+    cmd->add_option("--seed", args->seed, "Seed of the initialisation and the shuffling")
+        ->capture_default_str()
+        ->check(table_range("--seed"));
     cmd->add_option("--checkpoint", args->checkpoint,
                     "Checkpoint file: written periodically, resumed from if it exists and matches");
     cmd->add_option("--checkpoint-every", args->checkpoint_every, "Epochs between checkpoints")
         ->capture_default_str()
-        ->check(CLI::Range(1, kMaxEpochs));
+        ->check(table_range("--checkpoint-every"));
     cmd->add_option("--patience", args->patience, "Early stopping patience in epochs (0: never)")
         ->capture_default_str()
-        ->check(CLI::Range(0, kMaxEpochs));
+        ->check(table_range("--patience"));
     cmd->add_option("--validation", args->validation,
-                    "Fraction of training frames held out for validation (every k-th frame)")->capture_default_str();
+                    "Fraction of training frames held out for validation (every k-th frame)")
+        ->capture_default_str()
+        ->check(table_range("--validation"));
     cmd->add_option("--frame", args->frame,
                     "Features' frame: translation (relative to the Dirichlet mean or rod roots, the paper's) or "
                     "rigid (the boundary's best-fit rotation removed as well)")
@@ -68,13 +83,13 @@ void register_train_ae(CLI::App& app)
                     "Epochs of physics fine-tuning after training: L_recon + weight * L_ephys, the incremental "
                     "potential of the reconstructions (Tan et al.; 0: none)")
         ->capture_default_str()
-        ->check(CLI::Range(0, kMaxEpochs));
+        ->check(table_range("--physics-epochs"));
     cmd->add_option("--physics-weight", args->physics_weight, "Weight of L_ephys in the physics fine-tuning")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+        ->check(table_range("--physics-weight"));
     cmd->add_option("--physics-lr", args->physics_lr, "Adam learning rate of the physics fine-tuning")
         ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+        ->check(table_range("--physics-lr"));
     cmd->callback([args] {
         check_output_path(args->output, "-o");
         if (!args->checkpoint.empty()) check_output_path(args->checkpoint, "--checkpoint");

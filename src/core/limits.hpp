@@ -11,5 +11,9 @@ inline constexpr int kMaxEpochs = 10'000'000;
 inline constexpr int kMaxBatch = 10'000'000;
 inline constexpr int kMaxThreads = 1024;
 inline constexpr long long kMaxSeed = std::numeric_limits<long long>::max();  ///< seeds are ≥ 0
+/// Meshes, generated or read from a file: beyond these a scene could not be simulated on
+/// one machine anyway. A tet grid has about 6 tetrahedra per vertex (make_tet_beam).
+inline constexpr long long kMaxMeshVertices = 2'000'000;
+inline constexpr long long kMaxMeshElements = 6 * kMaxMeshVertices;
 
 } // namespace lb

@@ -181,11 +181,24 @@ void write_summary(h5::File& file, const std::string& group, const RolloutSummar
 RolloutSummary read_summary(const h5::File& file, const std::string& group)
 {
     RolloutSummary s;
+    // The integer counters are always written. A summary with none of them predates the
+    // training/test windows; one with some but not all is damaged (a truncated or edited file).
+    int integers = 0, present = 0;
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (!m.integer) continue;
+        ++integers;
+        present += file.has_attribute(group, m.name) ? 1 : 0;
+    }
     for (const SummaryMetric& m : summary_metrics()) {
         if (!file.has_attribute(group, m.name)) {
+            if (m.integer && present == 0)
+                throw IoError("rollout file '" + file.path() + "': summary '" + group + "' has none of its " +
+                              std::to_string(integers) + " counters (attribute '" + m.name +
+                              "' first): written by a latentbench older than the training/test windows; roll out again");
             if (m.integer)
-                throw IoError("rollout summary '" + group + "' has no attribute '" + m.name +
-                              "' (written by an older latentbench, before the training/test windows: roll out again)");
+                throw IoError("rollout file '" + file.path() + "': summary '" + group + "' lacks attribute '" + m.name +
+                              "' (it has " + std::to_string(present) + " of its " + std::to_string(integers) +
+                              " counters): the file is damaged; roll out again");
             m.set(s, std::numeric_limits<double>::quiet_NaN());
         } else if (m.integer) {
             m.set(s, double(file.attribute_int(group, m.name)));

@@ -369,7 +369,15 @@ public:
     double loss_and_gradient(const std::vector<Index>& indices, Rng& rng) override
     {
         m_trainer.make_batch(m_samples, indices, rng, m_batch);
-        return m_trainer.loss_and_gradient(m_model, m_batch);
+        try {
+            return m_trainer.loss_and_gradient(m_model, m_batch);
+        } catch (const NonFinitePotential& e) {
+            const Index column = std::clamp<Index>(e.column, 0, m_batch.size() - 1);
+            throw NumericalError("non-finite incremental potential (" + std::to_string(e.value) + ") at training sample " +
+                                 std::to_string(m_batch.source[std::size_t(column)]) + " of " +
+                                 std::to_string(m_samples.size()) +
+                                 " (the decoded state of the network's prediction, or its inertia target, is not finite)");
+        }
     }
 
 private:
@@ -422,6 +430,7 @@ nn::TrainingLoopOptions IntegratorTrainer::loop_options() const
     nn::TrainingLoopOptions loop;
     static_cast<nn::TrainingRunOptions&>(loop) = m_options;
     loop.label = "train " + to_string(m_options.loss);
+    loop.trainer = "latent integrator";
     loop.epochs = m_options.epochs;
     loop.batch_size = m_options.batch_size;
     loop.drop_last = false;  // every sample every epoch: ceil(S / batch) near-equal batches

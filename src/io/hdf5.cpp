@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <type_traits>
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -356,12 +357,15 @@ std::vector<hsize_t> File::dataset_dims(hid_t set, const std::string& name) cons
     return dims;
 }
 
-void File::check_numeric(hid_t set, const std::string& name) const
+void File::check_numeric(hid_t set, const std::string& name, bool integer) const
 {
     Handle type(H5Dget_type(set), H5Tclose);
     const H5T_class_t c = H5Tget_class(type.get());
     if (c != H5T_INTEGER && c != H5T_FLOAT)
         fail("expected a numeric dataset, found " + class_name(c), name);
+    // Reading floats into integers would truncate them (1.7 → 1) without a word.
+    if (integer && c != H5T_INTEGER)
+        fail("holds floating-point values; an index dataset must have an integer type", name);
 }
 
 namespace {
@@ -389,7 +393,7 @@ Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> File::read_numeric(const s
     const auto dims = dataset_dims(set.get(), name);
     if (dims.size() != rank)
         fail("expected a " + std::to_string(rank) + "-d dataset, found rank " + std::to_string(dims.size()), name);
-    check_numeric(set.get(), name);
+    check_numeric(set.get(), name, std::is_integral_v<Scalar>);
     return read_2d<Scalar>(*this, set.get(), dims, mem_type, name);
 }
 

@@ -78,8 +78,9 @@ private:
     void write_raw(const std::string& name, const std::vector<hsize_t>& dims, hid_t mem_type,
                    hid_t file_type, const void* data);
     hid_t open_dataset(const std::string& name) const;
-    /// IoError unless dataset `set` has an integer or floating-point type.
-    void check_numeric(hid_t set, const std::string& name) const;
+    /// IoError unless dataset `set` has an integer or floating-point type (with `integer`:
+    /// an integer type; indices stored as floats are refused, not truncated).
+    void check_numeric(hid_t set, const std::string& name, bool integer = false) const;
     /// Extent of an open dataset, refusing null spaces and implausible sizes.
     std::vector<hsize_t> dataset_dims(hid_t set, const std::string& name) const;
     /// A numeric dataset of the given rank as a matrix (a vector for rank 1).

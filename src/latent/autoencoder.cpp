@@ -498,6 +498,7 @@ void finetune_physics(Autoencoder& ae, const Dataset& data, const AutoencoderOpt
     static_cast<nn::TrainingRunOptions&>(loop) = o;
     loop.checkpoint_path = o.checkpoint_path.empty() ? std::string() : o.checkpoint_path + ".physics";
     loop.label = "train-ae physics";
+    loop.trainer = "autoencoder physics fine-tuning";
     loop.epochs = o.physics_epochs;
     loop.batch_size = o.physics_batch;
     loop.learning_rate = o.physics_learning_rate;
@@ -580,6 +581,7 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     const nn::Fingerprint print = fingerprint(ae, options, all_features, num_batches, k);
     nn::TrainingLoopOptions loop;
     loop.label = "train-ae";
+    loop.trainer = "autoencoder";
     loop.epochs = options.epochs;
     loop.batch_size = options.batch_size;
     loop.min_batch = 2;

@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -202,8 +204,11 @@ double LatentPotential::energies_into(const Eigen::Ref<const MatrixXd>& X, const
             energies[i] = pot.value(xt);
         }
     }, /*dynamic=*/true);
-    if (check_finite && !energies.allFinite())
-        throw NumericalError("non-finite incremental potential in the training batch");
+    if (check_finite && !energies.allFinite()) {
+        Index column = 0;
+        while (std::isfinite(energies[column])) ++column;
+        throw NonFinitePotential(column, energies[column]);
+    }
     return weights.dot(energies) / normalization;
 }
 

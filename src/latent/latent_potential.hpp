@@ -23,11 +23,28 @@
 #include <memory>
 #include <vector>
 
+#include "core/error.hpp"
 #include "latent/autoencoder.hpp"
 #include "nn/inference_network.hpp"
 #include "sim/physics_model.hpp"
 
 namespace lb {
+
+/// A checked evaluation found a non-finite incremental potential: `column` is the first
+/// column of the batch with one, `value` its energy. Callers that know what the columns
+/// are (the integrator trainer: its samples) rethrow it naming the sample.
+class NonFinitePotential : public NumericalError {
+public:
+    NonFinitePotential(Index column, double value)
+        : NumericalError("non-finite incremental potential (" + std::to_string(value) + ") in column " +
+                         std::to_string(column) + " of the training batch"),
+          column(column),
+          value(value)
+    {
+    }
+    Index column;
+    double value;
+};
 
 /// What evaluate() computes besides the per-sample energies.
 struct LatentEnergyOptions {

@@ -4,7 +4,9 @@
 #include <array>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 
 namespace lb {
 namespace {
@@ -157,6 +160,24 @@ public:
     TokenReader(const std::string& path, const std::string& what) : m_path(path), m_in(path)
     {
         if (!m_in) throw IoError("cannot open " + what + " file '" + path + "'");
+        std::error_code ec;
+        m_size = std::filesystem::file_size(path, ec);
+        if (ec) m_size = static_cast<std::uintmax_t>(-1);  // not a regular file: only the limit applies
+    }
+
+    /// Check a header's record count before anything is allocated for it: at most `max`,
+    /// and no more records than the file can hold, each `tokens` whitespace-separated
+    /// tokens on its own line (at least 2·tokens bytes). Fails naming the line and count.
+    void check_count(long count, const std::string& what, int tokens, long long max) const
+    {
+        if (count > max)
+            fail("the header declares " + std::to_string(count) + " " + what + "; at most " + std::to_string(max) +
+                 " are supported");
+        const std::uintmax_t needed = std::uintmax_t(count) * std::uintmax_t(2 * tokens) - 1;
+        if (count > 0 && needed > m_size)
+            fail("the header declares " + std::to_string(count) + " " + what + ", but the file has only " +
+                 std::to_string(m_size) + " bytes (" + std::to_string(count) + " " + what + " need at least " +
+                 std::to_string(needed) + ")");
     }
 
     /// Next token (possibly on a later line); false at end of file.
@@ -224,6 +245,7 @@ private:
     std::ifstream m_in;
     std::istringstream m_line_stream;
     long m_line = 0;
+    std::uintmax_t m_size = 0;  ///< bytes in the file
 };
 
 bool is_off_header(const std::string& token)
@@ -243,6 +265,8 @@ Mesh read_off_triangles(const std::string& path)
     const long nf = in.read_int("the face count");
     in.read_int("the edge count");
     if (nv <= 0 || nf < 0) in.fail("invalid vertex/face counts");
+    in.check_count(nv, "vertices", 3, kMaxMeshVertices);
+    in.check_count(nf, "faces", 4, kMaxMeshElements);
     in.skip_rest_of_line();
 
     Mesh mesh;
@@ -259,6 +283,8 @@ Mesh read_off_triangles(const std::string& path)
     for (long f = 0; f < nf; ++f) {
         const long n = in.read_int("the vertex count of face " + std::to_string(f));
         if (n < 3) in.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (need >= 3)");
+        if (n > nv) in.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " vertices, more than the " +
+                            std::to_string(nv) + " of the mesh");
         std::vector<int> polygon(static_cast<size_t>(n));
         for (long k = 0; k < n; ++k) {
             const long index = in.read_int("a vertex index of face " + std::to_string(f));
@@ -286,6 +312,7 @@ Mesh read_tetgen(const std::string& node_path, const std::string& ele_path)
     const long dim = nodes.read_int("the dimension");
     if (nv <= 0) nodes.fail("the point count must be positive");
     if (dim != 3) nodes.fail("expected dimension 3, got " + std::to_string(dim));
+    nodes.check_count(nv, "points", 4, kMaxMeshVertices);
     nodes.skip_rest_of_line();
     mesh.rest_positions.resize(nv, 3);
     long base = 0;
@@ -306,6 +333,7 @@ Mesh read_tetgen(const std::string& node_path, const std::string& ele_path)
     const long per_tet = ele.read_int("the nodes per tetrahedron");
     if (nt <= 0) ele.fail("the tetrahedron count must be positive");
     if (per_tet != 4 && per_tet != 10) ele.fail("expected 4 or 10 nodes per tetrahedron, got " + std::to_string(per_tet));
+    ele.check_count(nt, "tetrahedra", 1 + int(per_tet), kMaxMeshElements);
     ele.skip_rest_of_line();
     mesh.elements.resize(nt, 4);
     for (long t = 0; t < nt; ++t) {

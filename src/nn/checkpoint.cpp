@@ -1,11 +1,16 @@
 #include "nn/checkpoint.hpp"
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <sstream>
 #include <system_error>
 
+#include "core/error.hpp"
 #include "core/log.hpp"
 
 namespace lb::nn {
@@ -13,6 +18,8 @@ namespace lb::nn {
 namespace {
 
 constexpr const char* kPartsKey = "fingerprint.parts";
+/// Set-aside copies of one checkpoint kept before refusing to make another.
+constexpr int kMaxSetAside = 1000;
 
 std::vector<std::string> split(const std::string& text, char separator)
 {
@@ -112,19 +119,40 @@ void copy_network_state(Sequential& dst, Sequential& src)
     for (std::size_t i = 0; i < db.size(); ++i) db[i].value = sb[i].value;
 }
 
-void set_aside_checkpoint(const std::string& path, const std::string& reason)
+std::string set_aside_checkpoint(const std::string& path, const std::string& reason)
 {
-    const std::string stale = path + ".stale";
+    // link() never replaces an existing name (EEXIST), so two set-asides, or two processes
+    // setting aside at once, cannot destroy an earlier one; unlink() then frees the name.
     std::error_code ec;
-    std::filesystem::rename(path, stale, ec);  // replaces an older .stale (POSIX rename)
-    if (ec) {
-        std::filesystem::remove(path, ec);
-        log_warn("checkpoint %s not resumed: %s; could not rename it to %s, removed it", path.c_str(), reason.c_str(),
+    for (int n = 1; n <= kMaxSetAside; ++n) {
+        const std::string stale = path + ".stale." + std::to_string(n);
+        int error = 0;
+        if (::link(path.c_str(), stale.c_str()) == 0) {
+            if (::unlink(path.c_str()) != 0) {
+                error = errno;
+                ::unlink(stale.c_str());  // the checkpoint itself is still there: undo the copy
+                throw IoError("checkpoint '" + path + "' cannot be resumed (" + reason +
+                              ") and cannot be set aside: removing its name failed: " + std::strerror(error) +
+                              "; move it away or choose another checkpoint path");
+            }
+        } else if ((error = errno) == EEXIST) {
+            continue;
+        } else if (std::filesystem::exists(stale, ec)) {
+            continue;
+        } else {
+            // No hard links on this file system: a rename, after checking the name is free.
+            std::filesystem::rename(path, stale, ec);
+            if (ec)
+                throw IoError("checkpoint '" + path + "' cannot be resumed (" + reason + ") and cannot be set aside as '" +
+                              stale + "': " + ec.message() + "; it is left in place: move it away or choose another " +
+                              "checkpoint path");
+        }
+        log_warn("checkpoint %s not resumed: %s; set aside as %s, training from scratch", path.c_str(), reason.c_str(),
                  stale.c_str());
-        return;
+        return stale;
     }
-    log_warn("checkpoint %s not resumed: %s; set aside as %s, training from scratch", path.c_str(), reason.c_str(),
-             stale.c_str());
+    throw IoError("checkpoint '" + path + "' cannot be resumed (" + reason + ") and " + std::to_string(kMaxSetAside) +
+                  " set-aside copies '" + path + ".stale.N' exist already; remove some, or choose another checkpoint path");
 }
 
 void hash_network(Fnv1a64& hash, Sequential& net)

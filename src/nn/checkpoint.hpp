@@ -6,8 +6,10 @@
 // hashes of the inputs (the autoencoder's weights, the training data, the physics,
 // the initial network). Parts are compared one by one so that a refusal says which
 // input changed. A checkpoint that does not match, cannot be read, or whose tensors
-// have the wrong shapes is never resumed: it is set aside as `<path>.stale` (replacing
-// an older one) with a log line giving the reason, and training starts from scratch.
+// have the wrong shapes is never resumed: it is set aside as `<path>.stale.<n>` (the
+// first n free: an earlier set-aside is never replaced) with a log line giving the
+// reason and the new name, and training starts from scratch. No checkpoint is ever
+// deleted: one that cannot be set aside stops the run (IoError), left in place.
 //
 // File layout: root attributes "fingerprint.parts" (comma-separated part names) and
 // "fingerprint.<name>" (the part's text) for every part.
@@ -53,8 +55,10 @@ void require_shape(const std::string& what, const MatrixXd& loaded, Index rows, 
 /// agrees; nothing is copied if one differs (CheckpointMismatch).
 void copy_network_state(Sequential& dst, Sequential& src);
 
-/// Rename `path` to `path + ".stale"` (replacing an older one) and log `reason`.
-void set_aside_checkpoint(const std::string& path, const std::string& reason);
+/// Rename `path` to `path + ".stale.<n>"`, n the first free number from 1 (an existing
+/// name is never replaced), log `reason` and the new name, and return it. IoError, with
+/// `path` left in place, if it cannot be renamed.
+std::string set_aside_checkpoint(const std::string& path, const std::string& reason);
 
 /// Add the names, shapes and values of every parameter and buffer of `net` to `hash`.
 void hash_network(Fnv1a64& hash, Sequential& net);

@@ -30,11 +30,16 @@ struct Counters {
     double seconds = 0.0;
 };
 
-void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, Learner& learner,
-                      const std::vector<ParameterRef>& params, const Adam& adam, const Counters& c)
+constexpr const char* kTrainerKey = "trainer";
+
+std::string trainer_of(const TrainingLoopOptions& o) { return o.trainer.empty() ? o.label : o.trainer; }
+
+void write_checkpoint(const std::string& path, const std::string& trainer, const Fingerprint& fingerprint,
+                      Learner& learner, const std::vector<ParameterRef>& params, const Adam& adam, const Counters& c)
 {
     h5::write_file_atomically(path, [&](h5::File& f) {
         f.set_attribute("/", "format", std::string(kFormat));
+        f.set_attribute("/", kTrainerKey, trainer);
         write_fingerprint(f, fingerprint);
         const AdamState& s = adam.state();
         for (std::size_t i = 0; i < params.size(); ++i) {
@@ -53,32 +58,68 @@ void write_checkpoint(const std::string& path, const Fingerprint& fingerprint, L
     });
 }
 
-/// ConfigError unless `path` may be replaced by a checkpoint: it is one (of any version,
-/// or damaged: those are set aside), or an empty file. A file of another kind (a
-/// dataset, an autoencoder, a text file) given as --checkpoint by mistake is refused,
-/// never set aside or overwritten.
-void refuse_foreign_checkpoint(const std::string& path, const std::string& label)
+/// "a,b,c" → {a, b, c}.
+std::vector<std::string> comma_list(const std::string& text)
+{
+    std::vector<std::string> out;
+    std::size_t begin = 0;
+    for (std::size_t end; (end = text.find(',', begin)) != std::string::npos; begin = end + 1)
+        out.push_back(text.substr(begin, end - begin));
+    out.push_back(text.substr(begin));
+    return out;
+}
+
+/// Why the training checkpoint `f` is another trainer's, or "". Its "trainer" attribute
+/// says; one written before that was recorded is another's if exactly one of the two
+/// fingerprints has an "autoencoder" part (the autoencoder's trainer against a trainer
+/// in its latent space, the mistake of giving `fit` the checkpoint of `train-ae`).
+std::string other_trainer(const h5::File& f, const std::string& trainer, const Fingerprint& fingerprint)
+{
+    if (f.has_attribute("/", kTrainerKey)) {
+        const std::string theirs = f.attribute_string("/", kTrainerKey);
+        return theirs == trainer ? "" : "is a checkpoint of the '" + theirs + "' trainer, not of '" + trainer + "'";
+    }
+    if (!f.has_attribute("/", "fingerprint.parts")) return "";
+    const std::vector<std::string> parts = comma_list(f.attribute_string("/", "fingerprint.parts"));
+    const bool theirs = std::find(parts.begin(), parts.end(), "autoencoder") != parts.end();
+    bool ours = false;
+    for (const auto& part : fingerprint.parts) ours = ours || part.first == "autoencoder";
+    if (theirs == ours) return "";
+    return std::string("is a checkpoint of another trainer (one ") + (theirs ? "in an autoencoder's latent space" :
+                                                                                "of an autoencoder itself") +
+           "), not of '" + trainer + "'";
+}
+
+/// ConfigError unless `path` may be replaced by a checkpoint of this trainer: it is one
+/// (of any version, or damaged: those are set aside), or an empty file. A file of another
+/// kind (a dataset, an autoencoder, a text file, another trainer's checkpoint) given as
+/// --checkpoint by mistake is refused, never set aside or overwritten.
+void refuse_foreign_checkpoint(const std::string& path, const TrainingLoopOptions& o, const Fingerprint& fingerprint)
 {
     namespace fs = std::filesystem;
     std::error_code ec;
     const auto refuse = [&](const std::string& what) {
-        throw ConfigError(label + ": checkpoint '" + path + "' " + what +
-                          ", not a training checkpoint; refusing to replace it (choose another checkpoint path)");
+        throw ConfigError(o.label + ": checkpoint '" + path + "' " + what +
+                          "; refusing to set it aside or replace it: it is left as it is (choose another "
+                          "checkpoint path)");
     };
-    if (fs::is_directory(path, ec)) refuse("is a directory");
+    const auto foreign = [&](const std::string& what) { refuse(what + ", not a training checkpoint"); };
+    if (fs::is_directory(path, ec)) foreign("is a directory");
     if (fs::file_size(path, ec) == 0 && !ec) return;  // nothing to lose
-    if (H5Fis_hdf5(path.c_str()) <= 0) refuse("is not an HDF5 file");
-    std::string format;
+    if (H5Fis_hdf5(path.c_str()) <= 0) foreign("is not an HDF5 file");
+    std::string format, other;
     try {
         const h5::File f = h5::File::open(path);
-        if (!f.has_attribute("/", "format")) refuse("is an HDF5 file without a 'format' attribute (a dataset?)");
+        if (!f.has_attribute("/", "format")) foreign("is an HDF5 file without a 'format' attribute (a dataset?)");
         format = f.attribute_string("/", "format");
+        if (format.rfind("latentbench.training_checkpoint/", 0) == 0) other = other_trainer(f, trainer_of(o), fingerprint);
     } catch (const ConfigError&) {
         throw;
     } catch (const Error&) {
         return;  // an HDF5 file that cannot be read: a damaged checkpoint, set aside by the caller
     }
-    if (format.rfind("latentbench.training_checkpoint/", 0) != 0) refuse("is a '" + format + "' file");
+    if (format.rfind("latentbench.training_checkpoint/", 0) != 0) foreign("is a '" + format + "' file");
+    if (!other.empty()) refuse(other);
 }
 
 /// Resume, all or nothing: the reason it cannot be resumed (nothing changed), or empty.
@@ -255,7 +296,7 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
 
     const std::string& path = o.checkpoint_path;
     if (!path.empty() && std::filesystem::exists(path)) {
-        refuse_foreign_checkpoint(path, o.label);
+        refuse_foreign_checkpoint(path, o, fingerprint);
         const std::string reason = o.resume ? read_checkpoint(path, fingerprint, learner, params, adam, c)
                                             : "resume is off (training from scratch as asked)";
         if (reason.empty()) {
@@ -274,13 +315,18 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
     auto checkpoint = [&] {
         if (path.empty()) return;
         c.seconds = seconds();
-        write_checkpoint(path, fingerprint, learner, params, adam, c);
+        write_checkpoint(path, trainer_of(o), fingerprint, learner, params, adam, c);
         last_saved = c.epoch;
     };
     auto early_stop = [&] { return validation && o.patience > 0 && c.epochs_since_improvement >= o.patience; };
     Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30, c.epoch);
     while (c.epoch < o.epochs && !early_stop()) {
-        c.last_loss = runner.run(c.epoch);
+        try {
+            c.last_loss = runner.run(c.epoch);
+        } catch (const NumericalError& e) {
+            throw NumericalError(o.label + ": epoch " + std::to_string(c.epoch + 1) + " of " + std::to_string(o.epochs) +
+                                 ": " + e.what());
+        }
         ++c.epoch;
         const double val = validation ? learner.validation_loss() : 0.0;
         if (!std::isfinite(c.last_loss) || !std::isfinite(val))

@@ -20,7 +20,9 @@
 // parameters ("param/<name>"), Adam moments and step, plus the learner's extra state.
 // At the start an existing checkpoint is resumed only if resume is on, its fingerprint
 // matches and every tensor has the expected shape (checked before anything is copied);
-// otherwise it is set aside as `<path>.stale` with a log line giving the reason.
+// otherwise it is set aside as `<path>.stale.<n>` with a log line giving the reason and
+// the name. A file that is not a checkpoint of this trainer (a dataset, an autoencoder,
+// the checkpoint of another trainer) is refused with a ConfigError and left in place.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -67,7 +69,7 @@ struct TrainingRunOptions {
     double max_seconds = 0.0;
     /// Checkpoint file (empty: none), written every checkpoint_every epochs and at the end.
     /// It is resumed only if its fingerprint (resolved options and content hashes of the
-    /// inputs, nn/checkpoint.hpp) matches; otherwise it is set aside as `<path>.stale`
+    /// inputs, nn/checkpoint.hpp) matches; otherwise it is set aside as `<path>.stale.<n>`
     /// with a log line saying why.
     std::string checkpoint_path;
     int checkpoint_every = 100;
@@ -82,6 +84,9 @@ struct TrainingRunOptions {
 
 struct TrainingLoopOptions : TrainingRunOptions {
     std::string label = "train";  ///< progress lines and messages
+    /// What trains (e.g. "autoencoder", "latent integrator"), written into checkpoints: a
+    /// checkpoint of another trainer is refused, never set aside (empty: the label).
+    std::string trainer;
     int epochs = 100;
     Index batch_size = 256;
     Index min_batch = 1;          ///< 2 for training-mode BatchNorm

@@ -14,6 +14,7 @@
 
 #include "eval/rollout.hpp"
 #include "io/toml_config.hpp"
+#include "latent/autoencoder_option_table.hpp"
 #include "paper/paper_recipe.hpp"
 #include "pipeline/experiment.hpp"
 
@@ -33,20 +34,38 @@ std::string resolve(const std::string& path, const std::string& base)
     return (fs::path(LB_SOURCE_DIR) / path).string();
 }
 
+/// An integer key of [autoencoder], range-checked against the option table.
+long long ae_int(ConfigTable& t, const char* key, long long fallback)
+{
+    const AutoencoderOptionSpec& spec = autoencoder_option_by_key(key);
+    return t.get_int(key, fallback, spec.int_min, spec.int_max);
+}
+
+/// A real key of [autoencoder], range-checked against the option table.
+double ae_real(ConfigTable& t, const char* key, double fallback)
+{
+    const double value = t.get_double(key, fallback);
+    if (t.has(key)) {
+        const std::string problem = autoencoder_option_by_key(key).problem(value);
+        if (!problem.empty()) t.fail(key, problem);
+    }
+    return value;
+}
+
 void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given, bool& hidden_given)
 {
     if (t.has("latent")) {
-        o.latent_dim = Index(t.get_int("latent", 0, 1, kMaxWidth));
+        o.latent_dim = Index(ae_int(t, "latent", 0));
         latent_given = true;
     }
     hidden_given = hidden_given || t.has("hidden");
     o.hidden = t.get_widths("hidden", o.hidden);
-    o.pca_dim = Index(t.get_int("pca", o.pca_dim, 0, kMaxWidth));
-    o.epochs = t.get_count("epochs", o.epochs, 1, kMaxEpochs);
-    o.batch_size = t.get_count("batch", o.batch_size, 2, kMaxBatch);
-    o.learning_rate = t.get_double("learning_rate", o.learning_rate);
-    o.patience = t.get_count("patience", o.patience, 0, kMaxEpochs);
-    o.validation_fraction = t.get_double("validation", o.validation_fraction);
+    o.pca_dim = Index(ae_int(t, "pca", o.pca_dim));
+    o.epochs = int(ae_int(t, "epochs", o.epochs));
+    o.batch_size = int(ae_int(t, "batch", o.batch_size));
+    o.learning_rate = ae_real(t, "learning_rate", o.learning_rate);
+    o.patience = int(ae_int(t, "patience", o.patience));
+    o.validation_fraction = ae_real(t, "validation", o.validation_fraction);
     o.batch_norm = t.get_bool("batch_norm", o.batch_norm);
     o.residual = t.get_bool("residual", o.residual);
     if (t.has("frame")) {
@@ -63,16 +82,11 @@ void read_autoencoder(ConfigTable t, AutoencoderOptions& o, bool& latent_given, 
             t.fail("autoencoder_frames", e.what());
         }
     }
-    o.seed = std::uint64_t(t.get_int("seed", (long long)o.seed, 0, kMaxSeed));
-    o.physics_epochs = int(t.get_int("physics_epochs", o.physics_epochs, 0, kMaxEpochs));
-    o.physics_weight = t.get_double("physics_weight", o.physics_weight);
-    o.physics_learning_rate = t.get_double("physics_learning_rate", o.physics_learning_rate);
-    o.physics_batch = t.get_count("physics_batch", o.physics_batch, 1, kMaxBatch);
-    if (!(o.learning_rate > 0.0)) t.fail("learning_rate", "must be positive");
-    if (!(o.physics_weight >= 0.0) || !std::isfinite(o.physics_weight)) t.fail("physics_weight", "must be ≥ 0 and finite");
-    if (!(o.physics_learning_rate > 0.0) || !std::isfinite(o.physics_learning_rate))
-        t.fail("physics_learning_rate", "must be positive and finite");
-    if (!(o.validation_fraction > 0.0 && o.validation_fraction < 1.0)) t.fail("validation", "must lie in (0, 1)");
+    o.seed = std::uint64_t(ae_int(t, "seed", (long long)o.seed));
+    o.physics_epochs = int(ae_int(t, "physics_epochs", o.physics_epochs));
+    o.physics_weight = ae_real(t, "physics_weight", o.physics_weight);
+    o.physics_learning_rate = ae_real(t, "physics_learning_rate", o.physics_learning_rate);
+    o.physics_batch = int(ae_int(t, "physics_batch", o.physics_batch));
     t.finish();
 }
 

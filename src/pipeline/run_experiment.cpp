@@ -87,6 +87,18 @@ struct LoadedScene {
 /// a merge why a unit has no outputs; the outputs' keys alone say whether it completed.
 std::string status_path(const std::string& run_dir, const std::string& id) { return run_dir + "/units/" + id + ".status"; }
 
+/// A status that could not be written (a full disk): the status file is renamed to
+/// `<id>.status.unwritten-<status>`, which needs no free space, so that a merge can say
+/// that the last status write failed instead of reading a stale "running".
+std::string unwritten_path(const std::string& run_dir, const std::string& id, const std::string& status)
+{
+    return status_path(run_dir, id) + ".unwritten-" + status;
+}
+
+constexpr const char* kStatuses[] = {"running", "done", "failed"};
+
+/// Write the status atomically (io/atomic_file.hpp): the file holds the old status or the
+/// new one, whole. If it cannot be written, mark that (unwritten_path) and rethrow.
 void write_status(const std::string& run_dir, const std::string& id, const std::string& status, const std::string& detail)
 {
     char host[256] = "?";
@@ -94,8 +106,17 @@ void write_status(const std::string& run_dir, const std::string& id, const std::
     const std::time_t now = std::time(nullptr);
     char date[64];
     std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
-    write_text_atomically(status_path(run_dir, id), status + "\n" + std::string(host) + " pid " +
-                                                        std::to_string(getpid()) + " " + date + "\n" + detail + "\n");
+    std::error_code ec;
+    try {
+        write_text_atomically(status_path(run_dir, id), status + "\n" + std::string(host) + " pid " +
+                                                            std::to_string(getpid()) + " " + date + "\n" + detail + "\n");
+    } catch (const Error&) {
+        // A rename in the same directory: it works on a full disk, where writing does not.
+        if (fs::exists(status_path(run_dir, id), ec))
+            fs::rename(status_path(run_dir, id), unwritten_path(run_dir, id, status), ec);
+        throw;
+    }
+    for (const char* s : kStatuses) fs::remove(unwritten_path(run_dir, id, s), ec);  // an earlier failure's mark
 }
 
 /// Runs units of a plan through the stage cache; loads each scene's dataset and
@@ -126,10 +147,19 @@ public:
             case UnitKind::Eval: run_eval(u); break;
             }
         } catch (const std::exception& e) {
-            write_status(m_plan.run_dir, u.id, "failed", e.what());
+            try {
+                write_status(m_plan.run_dir, u.id, "failed", e.what());
+            } catch (const Error& status_error) {
+                // The unit's own error comes first; the status one is for the merge (marked).
+                throw Error(std::string(e.what()) + "; moreover its status could not be written: " + status_error.what());
+            }
             throw;
         }
-        write_status(m_plan.run_dir, u.id, "done", "");
+        try {
+            write_status(m_plan.run_dir, u.id, "done", "");
+        } catch (const Error& e) {
+            throw Error("unit '" + u.id + "' completed, but its status could not be written: " + e.what());
+        }
     }
 
     /// The tables' facts of one scene (its first scene unit) and every row of it.
@@ -296,7 +326,16 @@ private:
         const std::string& config_text = m_points[u.point_index]->toml_text;
         m_cache.run("integrators",
                     u.scene + ": fit '" + u.stem + "' (" + method.method_name() + ": " + method.summary() + ")", artefact,
-                    u.outputs[0].key, [&] { fit_artefact(method, in, ls.scene.name, artefact, config_text); });
+                    u.outputs[0].key, [&] {
+                        try {
+                            fit_artefact(method, in, ls.scene.name, artefact, config_text);
+                        } catch (const NumericalError& e) {  // name the inputs: the message knows epoch and sample
+                            const Unit& su = *m_plan.find(u.scene_unit);
+                            throw NumericalError("fit '" + u.stem + "' of " + u.scene + " on dataset '" +
+                                                 su.outputs[0].file + "' with autoencoder '" + su.outputs[1].file +
+                                                 "': " + e.what());
+                        }
+                    });
     }
 
     void run_eval(const Unit& u)
@@ -378,12 +417,23 @@ private:
 /// Why a unit has not completed, from its status file.
 std::string unit_problem(const ExperimentPlan& plan, const Unit& u)
 {
+    const std::string log = " (log: " + plan.run_dir + "/units/" + u.id + ".log)";
+    for (const char* attempted : kStatuses) {
+        const std::string marked = unwritten_path(plan.run_dir, u.id, attempted);
+        std::ifstream in(marked);
+        std::string status, where;
+        if (!std::getline(in, status)) continue;
+        std::getline(in, where);
+        return "its last status write failed (a full disk?): the unit, started on " + where +
+               ", could not record '" + attempted + "'" +
+               (std::string(attempted) == "failed" ? " and why" : "") + " (status '" + status + "' kept as " + marked +
+               "); its outputs are incomplete" + log;
+    }
     std::ifstream in(status_path(plan.run_dir, u.id));
     std::string status, where, detail, line;
     if (!std::getline(in, status)) return "not run";
     std::getline(in, where);
     while (std::getline(in, line)) detail += (detail.empty() ? "" : " ") + line;
-    const std::string log = " (log: " + plan.run_dir + "/units/" + u.id + ".log)";
     if (status == "failed") return "failed on " + where + ": " + detail + log;
     if (status == "running")
         return "started on " + where + " and did not finish (killed, pre-empted or still running)" + log;

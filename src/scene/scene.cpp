@@ -32,6 +32,20 @@ void transform_mesh(Mesh& mesh, ConfigTable& cfg)
     }
 }
 
+/// "a string", "an integer", ... for messages.
+std::string type_name(const toml::node& node)
+{
+    switch (node.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    default: return "a date or time";
+    }
+}
+
 std::string resolve_path(const std::string& path, const std::string& base_dir)
 {
     if (path.empty() || fs::path(path).is_absolute()) return path;
@@ -44,7 +58,7 @@ std::string resolve_path(const std::string& path, const std::string& base_dir)
 // Limits on generated meshes and sequences: beyond them a scene could not be simulated
 // on one machine anyway, and checking first gives a message instead of bad_alloc.
 constexpr int kMaxGridAxis = 100'000;
-constexpr int kMaxVertices = 2'000'000;
+constexpr int kMaxVertices = int(kMaxMeshVertices);
 constexpr int kMaxSceneFrames = 10'000'000;
 
 void check_vertex_count(const ConfigTable& cfg, const std::string& key, double vertices)
@@ -96,9 +110,14 @@ Mesh build_mesh(ConfigTable cfg, const std::string& base_dir)
         const std::string ele = resolve_path(ele_written, base_dir);
         for (const auto& [key, written, resolved] : {std::tuple{"node", node_written, node}, {"ele", ele_written, ele}}) {
             if (!fs::exists(resolved)) {
+                // A relative path is tried beside the scene file first, then under the repository.
+                const bool relative = !written.empty() && !fs::path(written).is_absolute();
+                const std::string tried =
+                    relative ? "'" + (fs::path(base_dir) / written).string() + "' (beside the scene file) and '" +
+                                   resolved + "' (in the repository)"
+                             : "'" + resolved + "'";
                 throw IoError(cfg.source() + ": key '" + cfg.key_path(key) + "': mesh file '" + written +
-                              "' does not exist (looked for '" + resolved +
-                              "'); run scripts/prepare_meshes to build it");
+                              "' does not exist (looked for " + tried + "); run scripts/prepare_meshes to build it");
             }
         }
         mesh = read_tetgen(node, ele);
@@ -220,8 +239,17 @@ Scene load_scene_from_string(const std::string& text, const std::string& source,
     toml::table resolved = root;
     resolved.erase("variants");
     if (!options.variant.empty()) {
+        const toml::node* variants_node = root.get("variants");
+        if (variants_node && !variants_node->is_table())
+            throw ConfigError(source + ": key 'variants' must be a table of variant tables ([variants." +
+                              options.variant + "]), found " + type_name(*variants_node));
         const toml::table* variants = root["variants"].as_table();
-        const toml::table* variant = variants ? (*variants)[options.variant].as_table() : nullptr;
+        const toml::node* variant_node = variants ? variants->get(options.variant) : nullptr;
+        if (variant_node && !variant_node->is_table())
+            throw ConfigError(source + ": variant '" + options.variant + "' (key 'variants." + options.variant +
+                              "') is " + type_name(*variant_node) + ", not a table; write it as [variants." +
+                              options.variant + "] with the keys it changes");
+        const toml::table* variant = variant_node ? variant_node->as_table() : nullptr;
         if (!variant) {
             std::string available;
             if (variants) {

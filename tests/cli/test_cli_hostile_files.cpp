@@ -229,5 +229,84 @@ TEST(CliHostileFiles, AutoencoderWithHostileArchitectureOrWeights)
                  out);
 }
 
+// Index datasets stored as floats used to be truncated (1.4 → 1) and used; now every
+// reader refuses them, naming the dataset.
+TEST(CliHostileFiles, FloatValuedIndexDatasets)
+{
+    const std::string dir = directory_with_dataset("float_indices");
+    const std::string elements = hostile_copy(dir, "elements_float", [](h5::File& f) {
+        f.write("elements", MatrixXd(f.read_matrix_int("elements").cast<double>().array() + 0.4));
+    });
+    expect_every_reader_refuses(dir, elements, {"'elements'", "floating-point"});
+    const std::string indices = hostile_copy(dir, "bc_indices_float", [](h5::File& f) {
+        f.write("bc/indices", VectorXd(f.read_vector_int("bc/indices").cast<double>().array() + 0.4));
+    });
+    expect_every_reader_refuses(dir, indices, {"'bc/indices'", "floating-point"});
+}
+
+// A linear_pca artefact with a NaN variance used to load; one whose variances have the
+// wrong length was reported as "shapes (mean 144, basis 144×3) do not match", naming
+// neither the dataset nor a disagreement. Now each names 'linear_pca.variances'.
+TEST(CliHostileFiles, LinearPcaVariances)
+{
+    const std::string dir = directory_with_dataset("pca_variances");
+    const auto fit = run_cli("fit --method linear_pca " + dir + "/data.h5 -o " + dir + "/pca.h5 --set dim=2");
+    ASSERT_EQ(fit.exit_code, 0) << fit.output;
+    const auto copy = [&](const std::string& name, const std::function<void(h5::File&)>& mutate) {
+        const std::string path = dir + "/" + name + ".h5";
+        fs::copy_file(dir + "/pca.h5", path, fs::copy_options::overwrite_existing);
+        h5::File f = h5::File::open(path, /*writable=*/true);
+        mutate(f);
+        return path;
+    };
+    const std::string out = dir + "/roll.h5";
+    const auto roll = [&](const std::string& artefact) {
+        return "rollout " + dir + "/data.h5 --integrator " + artefact + " --sequences all --frames 3 -o " + out;
+    };
+    const auto ok = run_cli(roll(dir + "/pca.h5"));
+    ASSERT_EQ(ok.exit_code, 0) << ok.output;
+    fs::remove(out);
+    const std::string nan = copy("variances_nan", [](h5::File& f) {
+        VectorXd v = f.read_vector("linear_pca.variances");
+        v(1) = kNaN;
+        f.write("linear_pca.variances", v);
+    });
+    expect_error(roll(nan), {nan, "'linear_pca.variances'", "not finite"}, out);
+    const std::string negative = copy("variances_negative", [](h5::File& f) {
+        VectorXd v = f.read_vector("linear_pca.variances");
+        v(0) = -1.0;
+        f.write("linear_pca.variances", v);
+    });
+    expect_error(roll(negative), {negative, "'linear_pca.variances'"}, out);
+    const std::string longer = copy("variances_longer", [](h5::File& f) {
+        f.write("linear_pca.variances", VectorXd(VectorXd::Ones(5)));
+    });
+    expect_error(roll(longer), {longer, "'linear_pca.variances'", "5 entries", "2 columns"}, out);
+}
+
+// Tetgen headers declaring more points or tetrahedra than the file or the mesh limits
+// allow: exit 1 naming the file, the line and the count, under `simulate` and
+// `simulate --check` (it used to be exit 2, `internal error: std::bad_alloc`).
+TEST(CliHostileFiles, TetgenHeaderCounts)
+{
+    const std::string dir = fresh_dir("cli_hostile_tetgen");
+    std::string scene = testing::kTinySceneToml;
+    const std::string beam = "generator = \"tet_beam\"\nnx = 2\nny = 1\nnz = 1\nsize = [0.2, 0.1, 0.1]\n";
+    scene.replace(scene.find(beam), beam.size(), "generator = \"tetgen\"\nnode = \"m.node\"\nele = \"m.ele\"\n");
+    write_file(dir + "/scene.toml", scene);
+    const std::string node = "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n", ele = "1 4 0\n0 0 1 2 3\n";
+    const std::string out = dir + "/out.h5";
+    const auto check = [&](const std::string& node_text, const std::string& ele_text, const std::string& file,
+                           const std::string& count) {
+        write_file(dir + "/m.node", node_text);
+        write_file(dir + "/m.ele", ele_text);
+        for (const char* extra : {"", " --check"})
+            expect_error("simulate " + dir + "/scene.toml -o " + out + extra, {dir + "/" + file + ":1:", count}, out);
+    };
+    check("100000000000 3 0 0\n0 0 0 0\n", ele, "m.node", "100000000000 points");
+    check(node, "99999999999 4 0\n0 0 1 2 3\n", "m.ele", "99999999999 tetrahedra");
+    check("1000000 3 0 0\n0 0 0 0\n", ele, "m.node", "1000000 points");
+}
+
 } // namespace
 } // namespace lb

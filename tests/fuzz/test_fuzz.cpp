@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "io/hdf5.hpp"
 #include "lb_paths.hpp"
 #include "support/cli_runner.hpp"
 #include "support/tiny_scene.hpp"
@@ -89,9 +90,27 @@ std::vector<std::string> split_args(const std::string& args)
 
 struct Corpus {
     std::string dir;
-    std::string data, ae, mlp, pca, rollout, checkpoint;
+    std::string data, ae, mlp, pca, rollout;
+    /// Training checkpoints of the autoencoder and of the latent MLP whose fingerprints match
+    /// the fuzz commands' options, rewound to epoch 1 of 3: a mutant that keeps its
+    /// fingerprint reaches the loader, and one the loader accepts trains on from its
+    /// (mutated) weights, Adam moments and counters.
+    std::string ae_checkpoint, fit_checkpoint;
     bool ok = false;
 };
+
+/// The options the fuzzed checkpoints were made with (the fingerprint covers them).
+const char* const kAeCheckpointOptions = " --latent 2 --epochs 3 --hidden 8 --pca 4 --checkpoint-every 1";
+const char* const kFitCheckpointOptions = " --set epochs=3 --set hidden=[8]";
+
+/// Rewind a finished checkpoint to epoch 1, as one written by a run killed after it.
+void rewind_checkpoint(const std::string& path)
+{
+    h5::File f = h5::File::open(path, /*writable=*/true);
+    f.set_attribute("/", "epoch", 1LL);
+    f.set_attribute("/", "best_epoch", std::min(1LL, f.attribute_int("/", "best_epoch")));
+    f.set_attribute("/", "epochs_since_improvement", std::min(1LL, f.attribute_int("/", "epochs_since_improvement")));
+}
 
 /// The tiny scene simulated, an autoencoder, a latent MLP and a linear PCA fit, a
 /// rollout and a training checkpoint: every HDF5 role, valid, made by the CLI.
@@ -109,14 +128,17 @@ const Corpus& corpus()
         k.mlp = k.dir + "/mlp.h5";
         k.pca = k.dir + "/pca.h5";
         k.rollout = k.dir + "/rollout.h5";
-        k.checkpoint = k.dir + "/ck.h5";
+        k.ae_checkpoint = k.dir + "/ae_ck.h5";
+        k.fit_checkpoint = k.dir + "/fit_ck.h5";
         const std::vector<std::string> steps = {
             "simulate " + k.dir + "/scene.toml -o " + k.data,
-            "train-ae " + k.data + " -o " + k.ae + " --latent 2 --epochs 3 --hidden 8 --pca 4 --checkpoint " +
-                k.checkpoint,
+            "train-ae " + k.data + " -o " + k.ae + " --latent 2 --epochs 3 --hidden 8 --pca 4",
             "fit --method latent_mlp " + k.data + " --ae " + k.ae + " -o " + k.mlp + " --set epochs=2",
             "fit --method linear_pca " + k.data + " -o " + k.pca,
             "rollout " + k.data + " --integrator " + k.pca + " --sequences all -o " + k.rollout,
+            "train-ae " + k.data + " -o " + k.dir + "/ae3.h5" + kAeCheckpointOptions + " --checkpoint " + k.ae_checkpoint,
+            "fit --method latent_mlp " + k.data + " --ae " + k.ae + " -o " + k.dir + "/mlp3.h5" + kFitCheckpointOptions +
+                " --checkpoint " + k.fit_checkpoint,
         };
         for (const std::string& s : steps) {
             const auto r = testing::run_cli("-q " + s);
@@ -125,6 +147,8 @@ const Corpus& corpus()
                 return k;
             }
         }
+        rewind_checkpoint(k.ae_checkpoint);
+        rewind_checkpoint(k.fit_checkpoint);
         k.ok = true;
         return k;
     }();
@@ -133,10 +157,20 @@ const Corpus& corpus()
 
 // ---- One case ----------------------------------------------------------------------------
 
+/// What became of a campaign's training checkpoints (counted from the log lines, so only
+/// in a campaign that runs without -q).
+struct CheckpointCounts {
+    int cases = 0;
+    int resumed = 0;  ///< the loader accepted the mutant and training went on from it
+    int loader = 0;   ///< the mutant reached the loader (resumed, or refused there)
+};
+
 /// Runs cases for one role until its time is up, checking each outcome.
 class Campaign {
 public:
-    explicit Campaign(const std::string& role) : m_role(role), m_dir(fresh_dir("fuzz_" + role))
+    /// @param quiet  run the CLI with -q (false: keep the log lines, to count checkpoints)
+    explicit Campaign(const std::string& role, bool quiet = true)
+        : m_role(role), m_dir(fresh_dir("fuzz_" + role)), m_quiet(quiet)
     {
         m_rng.seed(fuzz_seed() ^ std::hash<std::string>{}(role));
         m_start = std::chrono::steady_clock::now();
@@ -145,7 +179,11 @@ public:
     {
         std::printf("[fuzz] %s: %d cases in %.1f s (seed %llu): %d exit 0, %d exit 1, %d failures\n", m_role.c_str(),
                     m_cases, elapsed(), (unsigned long long)fuzz_seed(), m_exit0, m_exit1, m_failures);
+        if (!m_quiet)
+            std::printf("[fuzz] %s: %d checkpoints reached the loader, %d were resumed\n", m_role.c_str(),
+                        m_checkpoints.loader, m_checkpoints.resumed);
     }
+    const CheckpointCounts& checkpoints() const { return m_checkpoints; }
 
     Rng& rng() { return m_rng; }
     const std::string& dir() const { return m_dir; }
@@ -164,9 +202,10 @@ public:
         std::ofstream(log).close();
         ProcessOptions po{log, log, /*append_stdout=*/true};
         po.timeout_seconds = kCaseTimeout;
-        const int status = run_process(split_args("-q " + args), po);
+        const int status = run_process(split_args((m_quiet ? "-q " : "") + args), po);
         const std::string text = read_text(log);
         fs::remove(log);
+        count_checkpoint(text);
         std::string problem;
         if (status == kProcessTimedOut) {
             problem = "hung (killed after " + std::to_string(int(kCaseTimeout)) + " s)";
@@ -192,10 +231,32 @@ public:
 
 private:
     std::string m_role, m_dir;
+    bool m_quiet = true;
+    CheckpointCounts m_checkpoints;
     Rng m_rng;
     std::chrono::steady_clock::time_point m_start;
     int m_cases = 0, m_exit0 = 0, m_exit1 = 0, m_failures = 0;
 
+    /// A checkpoint refused before the loader: by its format or its fingerprint.
+    static bool refused_by_fingerprint(const std::string& reason)
+    {
+        for (const char* part : {"its options differ", "its data differ", "its network differ", "its autoencoder differ",
+                                 "its physics differ", "fingerprint", "of this version"})
+            if (reason.find(part) != std::string::npos) return true;
+        return false;
+    }
+    void count_checkpoint(const std::string& text)
+    {
+        ++m_checkpoints.cases;
+        if (text.find("resuming from checkpoint") != std::string::npos) {
+            ++m_checkpoints.resumed;
+            ++m_checkpoints.loader;
+            return;
+        }
+        const std::size_t at = text.find(" not resumed: ");
+        if (at != std::string::npos && !refused_by_fingerprint(text.substr(at, text.find('\n', at) - at)))
+            ++m_checkpoints.loader;
+    }
     double elapsed() const
     {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
@@ -617,12 +678,16 @@ void fuzz_toml(const std::string& role, const std::vector<std::string>& sources,
     }
 }
 
-void fuzz_hdf5(const std::string& role, const std::vector<std::string>& sources,
-               const std::function<std::string(const std::string& source, const std::string& mutated,
-                                               const std::string& out)>& command)
+CheckpointCounts fuzz_hdf5(const std::string& role, const std::vector<std::string>& sources,
+                           const std::function<std::string(const std::string& source, const std::string& mutated,
+                                                           const std::string& out)>& command,
+                           bool quiet = true)
 {
-    ASSERT_TRUE(corpus().ok);
-    Campaign c(role);
+    if (!corpus().ok) {
+        ADD_FAILURE() << "no fuzz corpus";
+        return {};
+    }
+    Campaign c(role, quiet);
     while (c.more()) {
         const std::string& source = pick(c.rng(), sources);
         const std::string mutated = c.dir() + "/case.h5";
@@ -630,6 +695,7 @@ void fuzz_hdf5(const std::string& role, const std::vector<std::string>& sources,
         const std::string what = fs::path(source).filename().string() + ": " + hostile_copy(c.rng(), source, mutated);
         c.run(command(source, mutated, out), out, mutated, what);
     }
+    return c.checkpoints();
 }
 
 TEST(Fuzz, SceneToml)
@@ -694,12 +760,45 @@ TEST(Fuzz, Rollout)
               [&](const std::string&, const std::string& m, const std::string&) { return "evaluate " + m; });
 }
 
+// Mutants of checkpoints whose fingerprint matches the command's options (item 7 of issue
+// 44): most keep their fingerprint, so mutated weights, Adam moments and counters reach the
+// loaders of both trainers, and some are resumed and trained on.
 TEST(Fuzz, Checkpoint)
 {
     const Corpus& k = corpus();
-    fuzz_hdf5("checkpoint", {k.checkpoint}, [&](const std::string&, const std::string& m, const std::string& out) {
-        return "train-ae " + k.data + " -o " + out + " --latent 2 --epochs 3 --hidden 8 --pca 4 --checkpoint " + m;
-    });
+    const CheckpointCounts counts = fuzz_hdf5(
+        "checkpoint", {k.ae_checkpoint, k.fit_checkpoint},
+        [&](const std::string& source, const std::string& m, const std::string& out) {
+            if (source == k.fit_checkpoint)
+                return "fit --method latent_mlp " + k.data + " --ae " + k.ae + " -o " + out + kFitCheckpointOptions +
+                       " --checkpoint " + m;
+            return "train-ae " + k.data + " -o " + out + kAeCheckpointOptions + " --checkpoint " + m;
+        },
+        /*quiet=*/false);
+    EXPECT_GE(counts.loader, counts.cases / 3) << counts.loader << " of " << counts.cases
+                                              << " checkpoint mutants reached the loader";
+    EXPECT_GE(counts.resumed, 1) << "no checkpoint mutant was resumed in " << counts.cases << " cases";
+}
+
+// The unmutated corpus checkpoints are resumed by the fuzz commands: the precondition of
+// the campaign above (a fingerprint that did not match would set every mutant aside).
+TEST(Fuzz, CheckpointCorpusIsResumed)
+{
+    const Corpus& k = corpus();
+    ASSERT_TRUE(k.ok);
+    const std::string dir = fresh_dir("fuzz_checkpoint_corpus");
+    const std::string ae_copy = dir + "/ae_ck.h5", fit_copy = dir + "/fit_ck.h5";
+    fs::copy_file(k.ae_checkpoint, ae_copy);
+    fs::copy_file(k.fit_checkpoint, fit_copy);
+    for (const std::string& args :
+         {"train-ae " + k.data + " -o " + dir + "/ae.h5" + kAeCheckpointOptions + " --checkpoint " + ae_copy,
+          "fit --method latent_mlp " + k.data + " --ae " + k.ae + " -o " + dir + "/mlp.h5" + kFitCheckpointOptions +
+              " --checkpoint " + fit_copy}) {
+        const auto r = testing::run_cli(args);
+        EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find("resuming from checkpoint"), std::string::npos) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find("at epoch 1"), std::string::npos) << args << "\n" << r.output;
+    }
 }
 
 } // namespace

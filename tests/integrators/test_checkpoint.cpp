@@ -1,6 +1,6 @@
 // Integrator checkpoints are resumed only when they were made from the same resolved
 // options, autoencoder, training samples, physics and initial network; anything else
-// (including a file of other shapes) is set aside as <path>.stale and training starts
+// (including a file of other shapes) is set aside as <path>.stale.1 and training starts
 // from scratch.
 #include <gtest/gtest.h>
 
@@ -28,7 +28,7 @@ std::string fresh_path(const std::string& name)
     fs::create_directories(dir);
     const fs::path path = dir / (name + ".h5");
     fs::remove(path);
-    fs::remove(path.string() + ".stale");
+    for (int n = 1; fs::remove(path.string() + ".stale." + std::to_string(n)); ++n) { }
     return path.string();
 }
 
@@ -60,7 +60,7 @@ void expect_trained_from_scratch(const IntegratorTrainSummary& s, const Integrat
     EXPECT_NE(s.final_loss, 0.0);
     EXPECT_NE(s.checkpoint_refused.find(reason_part), std::string::npos)
         << "reason '" << s.checkpoint_refused << "' does not mention '" << reason_part << "'";
-    EXPECT_TRUE(fs::exists(o.checkpoint_path + ".stale"));
+    EXPECT_TRUE(fs::exists(o.checkpoint_path + ".stale.1"));
     EXPECT_TRUE(fs::exists(o.checkpoint_path));  // rewritten by this run
 }
 
@@ -192,7 +192,7 @@ TEST(IntegratorCheckpoint, FinishedRunIsResumedWithItsLoss)
     EXPECT_TRUE(again.checkpoint_refused.empty());
     EXPECT_EQ(again.epochs_run, 3);
     EXPECT_EQ(again.final_loss, first.final_loss);
-    EXPECT_FALSE(fs::exists(ckpt + ".stale"));
+    EXPECT_FALSE(fs::exists(ckpt + ".stale.1"));
 }
 
 // A resumed run's training time includes the earlier processes' (the tables' budget column

@@ -318,7 +318,7 @@ INSTANTIATE_TEST_SUITE_P(Physics, LatentPotentialPhysics,
                                            Case{"rods", latent_test::rod_physics, false}),
                          [](const auto& info) { return std::string(info.param.name); });
 
-TEST(LatentPotential, NonFiniteEnergyThrowsInTheBatchAndIsReturnedForOneSample)
+TEST(LatentPotential, NonFiniteEnergyThrowsNamingTheColumnAndIsReturnedForOneSample)
 {
     Problem p(latent_test::cloth_physics(), 2, 5);
     LatentPotential potential(*p.model, *p.ae, kPenaltyWeight);
@@ -326,8 +326,10 @@ TEST(LatentPotential, NonFiniteEnergyThrowsInTheBatchAndIsReturnedForOneSample)
     try {
         potential.evaluate(p.Z, p.T, p.X_prev, p.X_prev2, {});
         ADD_FAILURE() << "no NumericalError";
-    } catch (const NumericalError& e) {
-        EXPECT_STREQ(e.what(), "non-finite incremental potential in the training batch");
+    } catch (const NonFinitePotential& e) {  // a NumericalError naming the column, for the caller to map
+        EXPECT_EQ(e.column, 1);
+        EXPECT_FALSE(std::isfinite(e.value));
+        EXPECT_NE(std::string(e.what()).find("in column 1 of the training batch"), std::string::npos) << e.what();
     }
     EXPECT_FALSE(std::isfinite(potential.value(p.Z.col(1), p.T.col(1), p.X_prev.col(1), p.X_prev2.col(1))));
     EXPECT_TRUE(std::isfinite(potential.value(p.Z.col(0), p.T.col(0), p.X_prev.col(0), p.X_prev2.col(0))));

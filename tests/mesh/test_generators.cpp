@@ -267,5 +267,38 @@ TEST(Readers, TetgenErrorsNameTheFileAndLine)
     for (const auto& p : {node_path, bad_ele, flat_ele, bad_node}) std::remove(p.c_str());
 }
 
+// A header's count is checked against the mesh limits and the file's size before anything
+// is allocated: 10^11 points used to end in std::bad_alloc.
+TEST(Readers, TetgenAndOffHeaderCountsAreCheckedBeforeAllocating)
+{
+    const std::string node_path = temp_path("count.node");
+    write_file(node_path, "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+    const std::string ele_path = temp_path("count.ele");
+    write_file(ele_path, "1 4 0\n0 0 1 2 3\n");
+    EXPECT_EQ(read_tetgen(node_path, ele_path).elements.rows(), 1);
+
+    const std::string huge_node = temp_path("huge.node");
+    write_file(huge_node, "# comment\n100000000000 3 0 0\n0 0 0 0\n");
+    expect_io_error([&] { read_tetgen(huge_node, ele_path); }, {"huge.node", ":2:", "100000000000 points", "at most"});
+    const std::string huge_ele = temp_path("huge.ele");
+    write_file(huge_ele, "99999999999 4 0\n0 0 1 2 3\n");
+    expect_io_error([&] { read_tetgen(node_path, huge_ele); }, {"huge.ele", ":1:", "99999999999 tetrahedra"});
+    // Within the limits but more records than the file could hold.
+    const std::string long_node = temp_path("long.node");
+    write_file(long_node, "1000 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+    expect_io_error([&] { read_tetgen(long_node, ele_path); }, {"long.node", ":1:", "1000 points", "bytes"});
+    const std::string long_ele = temp_path("long.ele");
+    write_file(long_ele, "50 4 0\n0 0 1 2 3\n");
+    expect_io_error([&] { read_tetgen(node_path, long_ele); }, {"long.ele", ":1:", "50 tetrahedra", "bytes"});
+    const std::string huge_off = temp_path("huge.off");
+    write_file(huge_off, "OFF\n3 99999999999 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    expect_io_error([&] { read_off_triangles(huge_off); }, {"huge.off", ":2:", "99999999999 faces"});
+    const std::string wide_face = temp_path("wide_face.off");
+    write_file(wide_face, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n");
+    expect_io_error([&] { read_off_triangles(wide_face); }, {"wide_face.off", ":6:", "4000000000 vertices"});
+    for (const auto& p : {node_path, ele_path, huge_node, huge_ele, long_node, long_ele, huge_off, wide_face})
+        std::remove(p.c_str());
+}
+
 } // namespace
 } // namespace lb

@@ -429,7 +429,7 @@ TEST(Experiment, ChangedAutoencoderOrForceNeverResumesAFinishedCheckpoint)
     EXPECT_EQ(artefact_flag(ours, "resumed"), 0);
     EXPECT_EQ(artefact_flag(ours, "epochs_run"), 5);
     EXPECT_GT(h5::File::open(ours).attribute_double("/", "final_loss"), 0.0);
-    EXPECT_TRUE(fs::exists(options.output_dir + "/cantilever_small/integrators/ours.checkpoint.h5.stale"));
+    EXPECT_TRUE(fs::exists(options.output_dir + "/cantilever_small/integrators/ours.checkpoint.h5.stale.1"));
     EXPECT_NE(read_all(options.output_dir + "/run.log").find("autoencoder differs"), std::string::npos);
 
     // --force integrators: trains again from scratch, although the checkpoint matches.
@@ -437,6 +437,9 @@ TEST(Experiment, ChangedAutoencoderOrForceNeverResumesAFinishedCheckpoint)
     run_experiment(load_experiment(path, builtin_methods()), options);
     EXPECT_EQ(artefact_flag(ours, "resumed"), 0);
     EXPECT_EQ(artefact_flag(ours, "epochs_run"), 5);
+    // The second set-aside gets a name of its own: the first is kept.
+    EXPECT_TRUE(fs::exists(options.output_dir + "/cantilever_small/integrators/ours.checkpoint.h5.stale.1"));
+    EXPECT_TRUE(fs::exists(options.output_dir + "/cantilever_small/integrators/ours.checkpoint.h5.stale.2"));
 
     // Unforced and unchanged: nothing runs.
     options.force.clear();

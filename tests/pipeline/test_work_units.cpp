@@ -8,11 +8,15 @@
 #include <iterator>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "baselines/builtin_methods.hpp"
+#include "baselines/linear_pca/linear_pca_method.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/log.hpp"
 #include "pipeline/experiment.hpp"
+#include "methods/registry.hpp"
 #include "pipeline/plan.hpp"
 #include "support/cli_runner.hpp"
 
@@ -337,6 +341,106 @@ TEST(WorkUnits, MergedUnitsGiveTheLocalRunsTables)
 
 namespace lb {
 namespace {
+
+/// linear_pca, except that its first fit leaves the disk "full" for what the unit writes
+/// next, its cache key and its status: their temporaries (`<final>.tmp-<pid>`) are made
+/// links to /dev/full, where every write fails with ENOSPC, as on a full disk.
+class FullDiskAfterFit final : public Method {
+public:
+    explicit FullDiskAfterFit(std::unique_ptr<Method> inner) : m_inner(std::move(inner)) { }
+    static bool& armed()
+    {
+        static bool on = true;
+        return on;
+    }
+    std::string method_name() const override { return "linear_pca_full_disk"; }
+    void resolve(const MethodScene& scene) override { m_inner->resolve(scene); }
+    std::string options_text() const override { return m_inner->options_text(); }
+    std::string summary() const override { return m_inner->summary(); }
+    void fit(const MethodInputs& in, h5::File& out) const override
+    {
+        m_inner->fit(in, out);
+        if (!armed()) return;
+        armed() = false;
+        const std::string pid = std::to_string(::getpid());
+        const fs::path checkpoint(in.checkpoint_path);  // <run>/<scene>/integrators/<stem>.checkpoint.h5
+        const std::string stem = checkpoint.filename().string().substr(0, checkpoint.filename().string().find('.'));
+        fs::create_symlink("/dev/full", (checkpoint.parent_path() / (stem + ".h5.key.tmp-" + pid)));
+        const fs::path units = checkpoint.parent_path().parent_path().parent_path() / "units";
+        for (const auto& e : fs::directory_iterator(units)) {
+            const std::string name = e.path().filename().string();
+            if (name.rfind("fit.", 0) == 0 && name.size() > 7 && name.compare(name.size() - 7, 7, ".status") == 0)
+                fs::create_symlink("/dev/full", e.path().string() + ".tmp-" + pid);
+        }
+    }
+    std::unique_ptr<Integrator> load(const MethodInputs& in, const h5::File* artefact,
+                                     const std::string& label) const override
+    {
+        return m_inner->load(in, artefact, label);
+    }
+
+private:
+    std::unique_ptr<Method> m_inner;
+};
+
+// A full disk at the end of a fit unit: the artefact is committed, but neither its cache
+// key nor the unit's status can be written. The status used to keep saying "running", so
+// the merge reported the unit as "killed, pre-empted or still running"; now the failed
+// status write is recorded without needing space (a rename), and the merge says so.
+TEST(WorkUnits, MergeSaysTheLastStatusWriteFailed)
+{
+    if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full to simulate a full disk";
+    MethodRegistry registry = builtin_methods();
+    MethodFactory factory = linear_pca_method();
+    const auto parse = factory.parse;
+    factory.name = "linear_pca_full_disk";
+    factory.parse = [parse](ConfigTable& entry, ConfigTable& defaults) -> std::unique_ptr<Method> {
+        return std::make_unique<FullDiskAfterFit>(parse(entry, defaults));
+    };
+    registry.add(factory);
+    set_log_level(LogLevel::Quiet);
+    const std::string suite = "name = \"full\"\n[autoencoder]\nhidden = [16]\npca = 8\nepochs = 20\nbatch = 16\n"
+                              "learning_rate = 1.0e-3\n[[integrators]]\nname = \"pca\"\nmethod = \"linear_pca_full_disk\"\n"
+                              "[[scenes]]\nscene = \"experiments/scenes/cantilever.toml\"\nvariant = \"small\"\n"
+                              "[evaluation]\nframes = 20\nfull_space = false\n[outputs]\nplots = false\n";
+    const ExperimentConfig ex = load_experiment(write_suite("full_disk", suite), registry);
+    RunOptions options;
+    options.output_dir = fresh_dir("units_full_disk_run");
+    const ExperimentPlan plan = plan_experiment(ex, options.output_dir);
+    const Unit* fit = plan.find("fit.cantilever_small.pca");
+    ASSERT_NE(fit, nullptr);
+    run_unit(ex, fit->scene_unit, options);
+
+    FullDiskAfterFit::armed() = true;
+    try {
+        run_unit(ex, fit->id, options);
+        FAIL() << "expected the full disk to fail the unit";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(fit->outputs[0].file + ".key"), std::string::npos) << what;
+        EXPECT_NE(what.find("status could not be written"), std::string::npos) << what;
+    }
+    EXPECT_TRUE(fs::exists(fit->outputs[0].file));   // committed
+    EXPECT_FALSE(unit_complete(*fit));               // without its key
+    const std::string status = options.output_dir + "/units/" + fit->id + ".status";
+    EXPECT_TRUE(fs::exists(status + ".unwritten-failed"));
+    for (const auto& e : fs::directory_iterator(options.output_dir + "/units"))
+        EXPECT_EQ(e.path().string().find(".tmp-"), std::string::npos) << e.path();
+    try {
+        merge_units(ex, options);
+        FAIL() << "expected the merge to refuse";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(fit->id + ": its last status write failed"), std::string::npos) << what;
+        EXPECT_NE(what.find("could not record 'failed'"), std::string::npos) << what;
+        EXPECT_EQ(what.find("killed, pre-empted"), std::string::npos) << what;
+    }
+    // Space again: the unit runs, its status says done and the mark is gone.
+    EXPECT_EQ(run_unit(ex, fit->id, options).stages_run, 1);
+    EXPECT_TRUE(unit_complete(*fit));
+    EXPECT_NE(read_all(status).find("done"), std::string::npos);
+    EXPECT_FALSE(fs::exists(status + ".unwritten-failed"));
+}
 
 /// A method whose fit changed (fit_version() > 1) gets a new stage key, so its cached
 /// artefacts are refitted; version-1 methods keep the key they always had.

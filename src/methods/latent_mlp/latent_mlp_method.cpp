@@ -31,7 +31,7 @@ void read_training(ConfigTable& t, IntegratorTrainOptions& o, bool& hidden_given
         o.hidden = t.get_widths("hidden", o.hidden);
         hidden_given = true;
     }
-    o.epochs = t.get_count("epochs", o.epochs, 0, kMaxEpochs);
+    o.epochs = t.get_count("epochs", o.epochs, 1, kMaxEpochs);
     o.batch_size = t.get_count("batch", o.batch_size, 1, kMaxBatch);
     o.learning_rate = t.get_double("learning_rate", o.learning_rate);
     o.max_seconds = t.get_double("max_seconds", o.max_seconds);
