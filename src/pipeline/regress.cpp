@@ -306,8 +306,9 @@ GateOptions load_gate_options(const std::string& path)
             if (!(m.absolute >= 0.0)) t.fail("absolute", "must be >= 0 (in the metric's unit)");
             const bool gate = t.get_bool("gate", true);
             t.finish();
-            if (it != o.metrics.end()) o.metrics.erase(it);
-            if (gate) o.metrics.push_back(m);
+            if (it != o.metrics.end() && gate) *it = m;  // keeps the defaults' order
+            else if (it != o.metrics.end()) o.metrics.erase(it);
+            else if (gate) o.metrics.push_back(m);
         }
         mt->finish();
     }
