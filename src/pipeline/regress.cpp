@@ -338,7 +338,6 @@ std::vector<GateRow> load_gate_rows(const std::string& dir)
     const std::string tables = fs::is_directory(fs::path(dir) / "tables") ? (fs::path(dir) / "tables").string() : dir;
     std::map<std::string, std::string> observations, methods;  // scene -> file
     for (const auto& e : fs::directory_iterator(tables)) {
-        const std::string name = e.path().filename().string();
         if (e.path().extension() != ".csv") continue;
         const std::string stem = e.path().stem().string();
         if (stem.rfind("observations_", 0) == 0) observations[stem.substr(13)] = e.path().string();

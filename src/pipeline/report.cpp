@@ -1,6 +1,7 @@
 #include "pipeline/report.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -266,9 +267,11 @@ Table observations_table(const SceneResult& r)
                     if (metric->scope == SummaryScope::Train && window == SummaryScope::Test) {
                         // the same field's test-window entry follows the training one's in the list
                         const auto& all = summary_metrics();
-                        w = &*std::find_if(all.begin(), all.end(), [&](const SummaryMetric& x) {
+                        const auto twin = std::find_if(all.begin(), all.end(), [&](const SummaryMetric& x) {
                             return x.scope == SummaryScope::Test && std::string(x.field) == metric->field;
                         });
+                        assert(twin != all.end());
+                        w = &*twin;
                     }
                     const double v = w->get(s);
                     cells.push_back(TableCell(std::isfinite(v) ? TableCell::significant(v, 6).text : "nan", v));
