@@ -4,7 +4,8 @@
     /usr/bin/python3 scripts/compare_bench.py BASELINE.json NOW.json
 
 For every benchmark of either file: the median real time over its repetitions in each,
-the ratio now / baseline, and a verdict. The verdict uses the repetitions' own spread:
+the ratio now / baseline (and that of the median CPU times: on a shared machine the CPU
+time of one-thread code is the steadier of the two), and a verdict on the real times. The verdict uses the repetitions' own spread:
 "slower" when every repetition of the run is slower than every repetition of the baseline
 (the two [min, max] ranges do not overlap), "faster" the other way round, "within spread"
 otherwise; a benchmark in one file only is "new" or "missing". Machines are noisy, so this
@@ -19,7 +20,7 @@ UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 
 
 def load(path):
-    """{benchmark: [real time per repetition in ns]} and the file's context."""
+    """{benchmark: [(real, cpu) time per repetition in ns]} and the file's context."""
     try:
         with open(path, encoding="utf-8") as f:
             data = json.load(f)
@@ -33,7 +34,8 @@ def load(path):
             continue  # aggregates (mean, median, stddev) are recomputed from the repetitions
         try:
             name = b.get("run_name", b["name"])
-            t = float(b["real_time"]) * UNIT_NS[b.get("time_unit", "ns")]
+            unit = UNIT_NS[b.get("time_unit", "ns")]
+            t = (float(b["real_time"]) * unit, float(b.get("cpu_time", b["real_time"])) * unit)
         except (KeyError, ValueError, TypeError) as e:
             raise SystemExit(f"compare_bench: {path}: malformed benchmark entry {b.get('name', '?')}: {e}")
         times.setdefault(name, []).append(t)
@@ -61,31 +63,34 @@ def compare(baseline_path, now_path, out=sys.stdout):
         b, n = base.get(name), now.get(name)
         if b is None or n is None:
             verdict = "new" if b is None else "missing"
-            t = n if b is None else b
-            rows.append((name, pretty(statistics.median(t)) if b else "—", pretty(statistics.median(t)) if n else "—",
-                         "—", verdict, len(b or []), len(n or [])))
+            t = [r for r, _ in (n if b is None else b)]
+            rows.append((name, "—" if b is None else pretty(statistics.median(t)),
+                         "—" if n is None else pretty(statistics.median(t)), "—", "—", verdict, len(b or []), len(n or [])))
             counts[verdict] += 1
             continue
-        ratio = statistics.median(n) / statistics.median(b)
-        if min(n) > max(b):
+        b_real, n_real = [r for r, _ in b], [r for r, _ in n]
+        ratio = statistics.median(n_real) / statistics.median(b_real)
+        cpu_ratio = statistics.median([c for _, c in n]) / statistics.median([c for _, c in b])
+        if min(n_real) > max(b_real):
             verdict = "slower"
-        elif max(n) < min(b):
+        elif max(n_real) < min(b_real):
             verdict = "faster"
         else:
             verdict = "within spread"
         counts[verdict] += 1
-        rows.append((name, pretty(statistics.median(b)), pretty(statistics.median(n)), f"{ratio:.3f}", verdict,
-                     len(b), len(n)))
+        rows.append((name, pretty(statistics.median(b_real)), pretty(statistics.median(n_real)), f"{ratio:.3f}",
+                     f"{cpu_ratio:.3f}", verdict, len(b), len(n)))
     print(f"# Benchmarks: {now_path} against {baseline_path} (report only)\n", file=out)
     print(f"- {context_line('baseline', base_ctx)}", file=out)
     print(f"- {context_line('now', now_ctx)}\n", file=out)
     print(", ".join(f"{v} {k}" for k, v in counts.items()) + f" ({len(rows)} benchmarks). A slowdown is flagged only "
           "when every repetition of the run is slower than every repetition of the baseline.\n", file=out)
-    print("| benchmark | baseline (median) | now (median) | now / baseline | verdict | reps (baseline, now) |", file=out)
-    print("|---|--:|--:|--:|---|--:|", file=out)
-    for name, b, n, ratio, verdict, rb, rn in rows:
+    print("| benchmark | baseline (median) | now (median) | now / baseline | CPU time now / baseline | verdict | "
+          "reps (baseline, now) |", file=out)
+    print("|---|--:|--:|--:|--:|---|--:|", file=out)
+    for name, b, n, ratio, cpu_ratio, verdict, rb, rn in rows:
         flag = f"**{verdict}**" if verdict == "slower" else verdict
-        print(f"| {name} | {b} | {n} | {ratio} | {flag} | {rb}, {rn} |", file=out)
+        print(f"| {name} | {b} | {n} | {ratio} | {cpu_ratio} | {flag} | {rb}, {rn} |", file=out)
     return counts
 
 

@@ -15,6 +15,8 @@ void register_regress(CLI::App& app)
     struct Args {
         std::string run, baseline, tolerance, junit;
         bool fail_on_missing = false;
+        double relative = -1.0;
+        double horizon_frames = -1.0;
     };
     auto a = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand(
@@ -27,9 +29,22 @@ void register_regress(CLI::App& app)
     cmd->add_option("--junit", a->junit, "Also write JUnit XML here (one testcase per row)");
     cmd->add_flag("--fail-on-missing", a->fail_on_missing,
                   "A baseline row the run lacks fails the gate (default: reported only)");
+    cmd->add_option("--relative", a->relative,
+                    "Relative tolerance of every gated error metric (over the tolerance file and the defaults)")
+        ->check(CLI::Range(0.0, 1e6));
+    cmd->add_option("--horizon-frames", a->horizon_frames,
+                    "Frames every gated horizon may shrink by (absolute tolerance; relative set to 0)")
+        ->check(CLI::Range(0.0, 1e9));
     cmd->callback([a] {
         GateOptions options = a->tolerance.empty() ? default_gate_options() : load_gate_options(a->tolerance);
         if (a->fail_on_missing) options.fail_on_missing = true;
+        for (GateMetric& m : options.metrics) {
+            if (!m.higher_is_better && a->relative >= 0.0) m.relative = a->relative;
+            if (m.higher_is_better && a->horizon_frames >= 0.0) {
+                m.relative = 0.0;
+                m.absolute = a->horizon_frames;
+            }
+        }
         const std::vector<GateRow> baseline = load_gate_rows(a->baseline);
         const std::vector<GateRow> now = load_gate_rows(a->run);
         const GateReport report = compare_gate_rows(baseline, now, options);

@@ -124,6 +124,27 @@ TEST(CliRegress, RegressionExitsOneAndNamesTheRows)
         << strict_missing.output;
 }
 
+TEST(CliRegress, FlagsWidenTheBands)
+{
+    const std::string base = write_run("base", 0.01, 0);
+    // 40 % more error: above 0.01 · 1.25 + 1e-4 by default, inside 0.01 · 1.5 + 1e-4 with --relative 0.5
+    const std::string drift = write_run("drift", 0.014, 0);
+    EXPECT_EQ(run_cli("regress " + drift + " --baseline " + base).exit_code, 1);
+    const auto loose = run_cli("regress " + drift + " --baseline " + base + " --relative 0.5");
+    EXPECT_EQ(loose.exit_code, 0) << loose.output;
+    EXPECT_NE(loose.output.find("mean_rmse 50 % + 0.0001"), std::string::npos) << loose.output;
+    // a blow-up 19 frames earlier (both runs diverge, so the divergence check is satisfied):
+    // caught by default, allowed with --horizon-frames 30
+    const std::string early = write_run("early", 0.01, 40);
+    const auto r = run_cli("regress " + early + " --baseline " + write_run("late", 0.01, 59) + " --horizon-frames 30");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("stable_horizon 0 % + 30 (higher is better)"), std::string::npos) << r.output;
+    EXPECT_EQ(run_cli("regress " + early + " --baseline " + write_run("late", 0.01, 59)).exit_code, 1);
+    const auto negative = run_cli("regress " + early + " --baseline " + base + " --relative -1");
+    EXPECT_EQ(negative.exit_code, 1);
+    EXPECT_NE(negative.output.find("--relative"), std::string::npos) << negative.output;
+}
+
 TEST(CliRegress, BadInputNamesTheFileAndExitsOne)
 {
     const std::string base = write_run("base", 0.01, 0);

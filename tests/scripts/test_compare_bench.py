@@ -58,17 +58,25 @@ class CompareBench(unittest.TestCase):
         now_json = json.loads(now.read_text())
         now_json["benchmarks"] += [{"name": "slow", "run_name": "slow", "run_type": "iteration", "real_time": t,
                                     "cpu_time": t, "time_unit": "us"} for t in (12000.0, 12500.0, 13000.0)]
+        # waiting on a busy machine: twice the wall-clock time, the same CPU time
+        now_json["benchmarks"] += [{"name": "waited", "run_type": "iteration", "real_time": 2.0 * t, "cpu_time": t,
+                                    "time_unit": "ms"} for t in (3.0, 3.0, 3.0)]
+        base_json = json.loads(base.read_text())
+        base_json["benchmarks"] += [{"name": "waited", "run_type": "iteration", "real_time": t, "cpu_time": t,
+                                     "time_unit": "ms"} for t in (3.0, 3.0, 3.0)]
+        base.write_text(json.dumps(base_json))
         now.write_text(json.dumps(now_json))
         p = run(base, now)
         self.assertEqual(p.returncode, 0, p.stderr)
-        self.assertEqual(self.row(p.stdout, "steady")[3:5], ["1.000", "within spread"])
-        self.assertEqual(self.row(p.stdout, "slow")[1:5], ["10.2 ms", "12.5 ms", "1.225", "**slower**"])
-        self.assertEqual(self.row(p.stdout, "fast")[3:5], ["0.500", "faster"])
+        self.assertEqual(self.row(p.stdout, "steady")[3:6], ["1.000", "1.000", "within spread"])
+        self.assertEqual(self.row(p.stdout, "slow")[1:6], ["10.2 ms", "12.5 ms", "1.225", "1.225", "**slower**"])
+        self.assertEqual(self.row(p.stdout, "fast")[3:6], ["0.500", "0.500", "faster"])
         # 16 / 14 = 1.14 slower at the median, but inside the baseline's own spread: not flagged
-        self.assertEqual(self.row(p.stdout, "noisy")[3:5], ["1.143", "within spread"])
-        self.assertEqual(self.row(p.stdout, "gone")[4], "missing")
-        self.assertEqual(self.row(p.stdout, "added")[4], "new")
-        self.assertIn("1 slower, 1 faster, 2 within spread, 1 new, 1 missing (6 benchmarks)", p.stdout)
+        self.assertEqual(self.row(p.stdout, "noisy")[3:6], ["1.143", "1.143", "within spread"])
+        self.assertEqual(self.row(p.stdout, "gone")[1:6], ["1 ms", "—", "—", "—", "missing"])
+        self.assertEqual(self.row(p.stdout, "added")[1:6], ["—", "2 ms", "—", "—", "new"])
+        self.assertEqual(self.row(p.stdout, "waited")[3:6], ["2.000", "1.000", "**slower**"])
+        self.assertIn("2 slower, 1 faster, 2 within spread, 1 new, 1 missing (7 benchmarks)", p.stdout)
         self.assertNotIn("_mean", p.stdout)  # aggregates are not benchmarks
 
     def test_unreadable_input_exits_one_naming_the_file(self):
