@@ -26,6 +26,12 @@ void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);
 void register_plan(CLI::App& app);
 void register_submit(CLI::App& app);
+void register_regress(CLI::App& app);
+
+/// The exit status a command reports without an error (e.g. `regress`: 1 when the gate
+/// fails); 0 unless a command sets it. main returns it after a successful parse.
+void set_exit_status(int status);
+int exit_status();
 
 /// `plan` and `submit`: the sweep and the unit counts (and with list_units each unit).
 void print_unit_plan(const ExperimentConfig& ex, const ExperimentPlan& plan, bool list_units);

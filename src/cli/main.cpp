@@ -29,7 +29,12 @@ void ensure_thread_environment(char** argv)
     setenv("LB_THREAD_ENV", "1", 1);
     execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
 }
+
+int g_exit_status = 0;
 } // namespace
+
+void lb::cli::set_exit_status(int status) { g_exit_status = status; }
+int lb::cli::exit_status() { return g_exit_status; }
 
 int main(int argc, char** argv)
 {
@@ -58,6 +63,7 @@ int main(int argc, char** argv)
     lb::cli::register_train_ae(app);
     lb::cli::register_plan(app);
     lb::cli::register_submit(app);
+    lb::cli::register_regress(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -83,5 +89,5 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "latentbench: internal error: %s\n", e.what());
         return 2;
     }
-    return 0;
+    return lb::cli::exit_status();
 }

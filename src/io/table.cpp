@@ -289,6 +289,109 @@ std::string latex_escape(const std::string& text)
     return out;
 }
 
+namespace {
+
+/// The value of a CSV field if the whole field is a number (to_csv's spelling), else none.
+std::optional<double> csv_value(const std::string& field)
+{
+    if (field.empty()) return std::nullopt;
+    double v = 0.0;
+    const char* end = field.data() + field.size();
+    const auto result = std::from_chars(field.data(), end, v);
+    if (result.ec != std::errc() || result.ptr != end) return std::nullopt;
+    return v;
+}
+
+} // namespace
+
+Table parse_csv(const std::string& text, const std::string& source)
+{
+    Table table;
+    size_t pos = 0, line = 1;
+    // Leading "# " comment lines: title, caption, then notes.
+    std::vector<std::string> comments;
+    while (pos < text.size() && text[pos] == '#') {
+        size_t end = text.find('\n', pos);
+        if (end == std::string::npos) end = text.size();
+        std::string c = text.substr(pos + 1, end - pos - 1);
+        if (!c.empty() && c.front() == ' ') c.erase(0, 1);
+        comments.push_back(std::move(c));
+        pos = std::min(end + 1, text.size());
+        ++line;
+    }
+    if (!comments.empty()) table.title = comments[0];
+    if (comments.size() > 1) table.caption = comments[1];
+    for (size_t k = 2; k < comments.size(); ++k) table.notes.push_back(comments[k]);
+
+    // RFC 4180 records: quoted fields may hold ',', '"' (doubled) and line breaks.
+    std::vector<std::vector<TableCell>> records;
+    std::vector<size_t> record_lines;
+    std::vector<TableCell> record;
+    std::string field;
+    bool quoted = false, field_was_quoted = false;
+    size_t record_line = line;
+    auto end_field = [&] {
+        TableCell cell(field);
+        if (!field_was_quoted) cell.value = csv_value(field);
+        record.push_back(std::move(cell));
+        field.clear();
+        field_was_quoted = false;
+    };
+    auto end_record = [&] {
+        end_field();
+        if (!(record.size() == 1 && record[0].text.empty() && !record[0].value)) {  // blank line
+            records.push_back(std::move(record));
+            record_lines.push_back(record_line);
+        }
+        record.clear();
+    };
+    for (; pos < text.size(); ++pos) {
+        const char c = text[pos];
+        if (quoted) {
+            if (c == '"' && pos + 1 < text.size() && text[pos + 1] == '"') {
+                field += '"';
+                ++pos;
+            } else if (c == '"') {
+                quoted = false;
+            } else {
+                if (c == '\n') ++line;
+                field += c;
+            }
+        } else if (c == '"' && field.empty()) {
+            quoted = field_was_quoted = true;
+        } else if (c == ',') {
+            end_field();
+        } else if (c == '\n') {
+            end_record();
+            record_line = ++line;
+        } else if (c != '\r') {
+            field += c;
+        }
+    }
+    if (quoted) throw IoError(source + ":" + std::to_string(record_line) + ": a quoted field is not closed");
+    if (!field.empty() || !record.empty() || field_was_quoted) end_record();
+    if (records.empty()) throw IoError(source + ": no header line (an empty table file)");
+    for (TableCell& c : records[0]) table.columns.push_back(c.text);
+    for (size_t r = 1; r < records.size(); ++r) {
+        if (records[r].size() != table.columns.size()) {
+            throw IoError(source + ":" + std::to_string(record_lines[r]) + ": " + std::to_string(records[r].size()) +
+                          " fields where the header has " + std::to_string(table.columns.size()));
+        }
+        table.rows.push_back(std::move(records[r]));
+    }
+    return table;
+}
+
+Table read_csv(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError("cannot read table " + path + ": " + std::strerror(errno));
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) throw IoError("cannot read table " + path);
+    return parse_csv(ss.str(), path);
+}
+
 std::string to_latex(const Table& table)
 {
     check_shape(table);

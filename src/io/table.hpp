@@ -68,6 +68,15 @@ std::string to_markdown(const Table& table);
 /// A cell with a numeric value writes the value (shortest exact decimal, "nan",
 /// "inf"); fields with ',', '"', '#', line breaks or edge spaces are quoted.
 std::string to_csv(const Table& table);
+/// Read a table written by to_csv: the leading "# " comment lines become title, caption and
+/// notes (in to_csv's order), then the header and the rows. A field that is a whole number in
+/// to_csv's spelling ("0.25", "1e-05", "nan", "inf") gets a value; every other field is text.
+/// Throws IoError naming `source` and the line if the header is missing, a quoted field is
+/// not closed or a row's field count differs from the header's.
+Table parse_csv(const std::string& text, const std::string& source);
+/// parse_csv of a file; IoError naming the path if it cannot be read.
+Table read_csv(const std::string& path);
+
 /// A booktabs `table` float (\toprule/\midrule/\bottomrule) with caption, label
 /// and notes in \footnotesize below; LaTeX specials in all text are escaped.
 std::string to_latex(const Table& table);

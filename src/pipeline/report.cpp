@@ -1,6 +1,7 @@
 #include "pipeline/report.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -236,6 +237,60 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
 
 } // namespace
 
+Table observations_table(const SceneResult& r)
+{
+    Table t;
+    t.title = "Observations on " + r.label;
+    t.caption = "One row per method, sweep point, seed, sequence and window (the tidy data behind methods_" + r.label +
+                "): every summary metric by its field name (README, Metrics), window metrics of the row's window; "
+                "diverged = the rollout blew up (stable_horizon < frames), diverged_at its stable horizon. seed is "
+                "nan for a method trained without one. Read with pandas.read_csv(path, comment='#').";
+    const bool swept = std::any_of(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return !m.point.empty(); });
+    t.columns = {"scene", "method", "sweep point", "seed", "sequence", "window"};
+    std::vector<const SummaryMetric*> metrics;  // rollout metrics and the training window's (named by field)
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (m.scope == SummaryScope::Test) continue;
+        metrics.push_back(&m);
+        t.columns.push_back(m.field);
+    }
+    t.columns.push_back("diverged");
+    t.columns.push_back("diverged_at");
+    for (const MethodResult& m : r.methods) {
+        for (size_t k = 0; k < m.summaries.size(); ++k) {
+            const RolloutSummary& s = m.summaries[k];
+            const long long seed = k < m.summary_seeds.size() ? m.summary_seeds[k] : -1;
+            const bool diverged = s.stable_horizon < s.frames;
+            for (const SummaryScope window : {SummaryScope::Train, SummaryScope::Test}) {
+                std::vector<TableCell> cells{r.label, m.name, swept ? (m.point.empty() ? "all points" : m.point) : "",
+                                             seed >= 0 ? TableCell(std::to_string(seed), double(seed)) : TableCell::missing("nan"),
+                                             k < m.sequences.size() ? m.sequences[k] : "",
+                                             window == SummaryScope::Train ? "train" : "test"};
+                for (const SummaryMetric* metric : metrics) {
+                    const SummaryMetric* w = metric;
+                    if (metric->scope == SummaryScope::Train && window == SummaryScope::Test) {
+                        // the same field's test-window entry follows the training one's in the list
+                        const auto& all = summary_metrics();
+                        const auto twin = std::find_if(all.begin(), all.end(), [&](const SummaryMetric& x) {
+                            return x.scope == SummaryScope::Test && std::string(x.field) == metric->field;
+                        });
+                        assert(twin != all.end());
+                        w = &*twin;
+                    }
+                    const double v = w->get(s);
+                    cells.push_back(TableCell(std::isfinite(v) ? TableCell::significant(v, 6).text : "nan", v));
+                }
+                cells.push_back(TableCell(diverged ? "1" : "0", diverged ? 1.0 : 0.0));
+                cells.push_back(diverged ? TableCell(std::to_string(s.stable_horizon), double(s.stable_horizon))
+                                         : TableCell::missing("nan"));
+                t.add_row(std::move(cells));
+            }
+        }
+    }
+    t.add_note("training horizon: " + std::to_string(r.train_frames) + " frames per sequence");
+    t.add_provenance();
+    return t;
+}
+
 std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes,
                                       const std::string& dir)
 {
@@ -256,6 +311,7 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
                              "autoencoders: embedding_" + r.label);
         }
         emit(methods, "methods_" + r.label);
+        write_csv(observations_table(r), dir + "/observations_" + r.label + ".csv");
         if (!embeddings.rows.empty()) emit(embeddings, "embedding_" + r.label);
         for (const AblationSpec& ab : ex.ablations) {
             // Only on scenes that ran every method of the ablation (a scene may run a subset).

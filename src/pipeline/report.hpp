@@ -32,6 +32,10 @@ struct MethodResult {
     std::string rollout_file;
     std::string rollout_key;  ///< the rollout stage's cache key (covers every input of the rollout)
     std::vector<RolloutSummary> summaries;  ///< one per evaluated sequence (and seed)
+    /// Parallel to `summaries` (may be empty, e.g. in tests): each summary's sequence name
+    /// and seed (-1: the method has no seed).
+    std::vector<std::string> sequences;
+    std::vector<long long> summary_seeds;
     /// With a suite's `seeds`: the seeds, and per seed the summary over its sequences.
     std::vector<std::uint64_t> seeds;
     std::vector<RolloutSummary> per_seed;
@@ -59,7 +63,15 @@ struct SceneResult {
     std::vector<MethodResult> methods;
 };
 
-/// Write every table (Markdown, CSV, LaTeX) into `dir`; returns the Markdown paths.
+/// The tidy table of one scene (DESIGN rule: one row per observation): one row per method,
+/// sweep point, seed, sequence and window, every summary metric by its field name (window
+/// metrics of the row's window), flags `diverged` (stable_horizon < frames) and
+/// `diverged_at` (the stable horizon, NaN if never). `seed` is NaN for a method without one,
+/// `sweep point` "" without a [sweep] ("all points" for a row every point shares).
+Table observations_table(const SceneResult& r);
+
+/// Write every table (Markdown, CSV, LaTeX) into `dir`, and per scene the tidy
+/// `observations_<label>.csv` (CSV only); returns the Markdown paths.
 std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes,
                                       const std::string& dir);
 

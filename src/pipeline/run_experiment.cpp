@@ -394,7 +394,11 @@ private:
                     mr.embeddings = load_embedding_metrics(h5::File::open(m_plan.find(u.fit_unit)->outputs[0].file));
             }
             std::vector<RolloutSummary> summaries;
-            for (const RolloutRecord& rec : load_rollout_summaries(u.outputs[0].file)) summaries.push_back(rec.summary);
+            for (const RolloutRecord& rec : load_rollout_summaries(u.outputs[0].file)) {
+                summaries.push_back(rec.summary);
+                mr.sequences.push_back(rec.sequence);
+                mr.summary_seeds.push_back(row.seeds.empty() ? -1 : static_cast<long long>(row.seeds[k]));
+            }
             mr.summaries.insert(mr.summaries.end(), summaries.begin(), summaries.end());
             mr.budgets.push_back(u.fit_unit.empty() ? TrainingBudget{}
                                                     : read_budget(m_plan.find(u.fit_unit)->outputs[0].file));

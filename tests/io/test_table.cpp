@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -144,6 +145,36 @@ TEST(Table, Csv)
     t.add_row({"1", " padded"});
     t.add_row({"2", "line\nbreak"});
     EXPECT_EQ(lb::to_csv(t), "\"#id\",text\n1,\" padded\"\n2,\"line\nbreak\"\n");
+}
+
+TEST(Table, CsvReadsBackWhatItWrites)
+{
+    Table t = demo_table();
+    t.add_row({"x\ny", TableCell("nan", std::numeric_limits<double>::quiet_NaN()), TableCell("inf", std::numeric_limits<double>::infinity())});
+    const Table back = lb::parse_csv(lb::to_csv(t), "demo.csv");
+    EXPECT_EQ(back.title, t.title);
+    EXPECT_EQ(back.caption, t.caption);
+    EXPECT_EQ(back.notes, t.notes);
+    EXPECT_EQ(back.columns, t.columns);
+    ASSERT_EQ(back.rows.size(), t.rows.size());
+    EXPECT_EQ(back.rows[1][0].text, "a|b, \"c\"");
+    EXPECT_FALSE(back.rows[1][0].value);
+    EXPECT_EQ(*back.rows[0][1].value, 0.12345);  // the value at full precision, not the text "0.123"
+    EXPECT_EQ(*back.rows[1][1].value, 1.5e-5);
+    EXPECT_TRUE(std::isnan(*back.rows[1][2].value));  // TableCell::missing
+    EXPECT_EQ(back.rows[3][0].text, "x\ny");
+    EXPECT_TRUE(std::isnan(*back.rows[3][1].value));
+    EXPECT_TRUE(std::isinf(*back.rows[3][2].value));
+    // malformed input names the source and the line
+    try {
+        lb::parse_csv("# title\na,b\n1,2\n3\n", "bad.csv");
+        FAIL() << "a short row was accepted";
+    } catch (const lb::IoError& e) {
+        EXPECT_EQ(std::string(e.what()), "bad.csv:4: 1 fields where the header has 2");
+    }
+    EXPECT_THROW(lb::parse_csv("a,b\n\"open,2\n", "bad.csv"), lb::IoError);
+    EXPECT_THROW(lb::parse_csv("# only a title\n", "bad.csv"), lb::IoError);
+    EXPECT_THROW(lb::read_csv(std::string(LB_TEST_TMP_DIR) + "/no_such_table.csv"), lb::IoError);
 }
 
 TEST(Table, Latex)

@@ -59,15 +59,20 @@ methods = ["ours", "sup"]
 
 TEST(Experiment, EveryShippedSuiteIsValid)
 {
-    int count = 0;
-    for (const auto& entry : fs::directory_iterator(fs::path(LB_SOURCE_DIR) / "experiments")) {
-        if (entry.path().extension() != ".toml") continue;
-        const ExperimentConfig ex = load_experiment(entry.path().string(), builtin_methods());
-        EXPECT_FALSE(ex.scenes.empty()) << entry.path();
-        EXPECT_FALSE(ex.scenes.front().methods.empty()) << entry.path();
-        ++count;
+    // experiments/ and the users' examples (tolerances/ and scenes/ hold no suites)
+    int count = 0, examples = 0;
+    for (const char* folder : {"experiments", "experiments/examples"}) {
+        for (const auto& entry : fs::directory_iterator(fs::path(LB_SOURCE_DIR) / folder)) {
+            if (entry.path().extension() != ".toml") continue;
+            const ExperimentConfig ex = load_experiment(entry.path().string(), builtin_methods());
+            EXPECT_FALSE(ex.scenes.empty()) << entry.path();
+            EXPECT_FALSE(ex.scenes.front().methods.empty()) << entry.path();
+            ++count;
+            examples += std::string(folder) == "experiments/examples";
+        }
     }
-    EXPECT_GE(count, 8);
+    EXPECT_GE(count, 9);
+    EXPECT_GE(examples, 1);
 }
 
 TEST(Experiment, RejectsBadKeysByName)
