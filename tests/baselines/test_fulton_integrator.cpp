@@ -133,14 +133,19 @@ TEST(FultonIntegrator, SmallCantileverRolloutFollowsGroundTruth)
     FultonIntegrator cub("cubature", p.ae, *p.model, c, {});
     const RolloutResult r_full = rollout(full, *p.model, seq);
     const RolloutResult r_cub = rollout(cub, *p.model, seq);
-    for (const RolloutResult* r : {&r_full, &r_cub}) {
-        EXPECT_EQ(r->summary.stable_horizon, 300) << r->method;
-        EXPECT_LT(r->summary.train.mean_rmse, 0.003) << r->method;
-        EXPECT_LT(r->summary.test.mean_rmse, 0.003) << r->method;
-        EXPECT_LT(r->summary.test.final_rmse, 0.003) << r->method;
-    }
     const MatrixXd X = seq.positions.transpose();
     const double projection = p.ae->relative_rmse(X, seq.bc_positions.transpose());
+    // Following the truth means staying within what the latent space can represent: the
+    // rollout's error within twice the autoencoder's own projection error of the sequence
+    // (its PCA layer is clamped to the training frames' rank, 10 here, so the projection is
+    // about 0.002), and never above 1 % of the diagonal.
+    ASSERT_LT(projection, 0.005);
+    for (const RolloutResult* r : {&r_full, &r_cub}) {
+        EXPECT_EQ(r->summary.stable_horizon, 300) << r->method;
+        EXPECT_LT(r->summary.train.mean_rmse, 2.0 * projection) << r->method;
+        EXPECT_LT(r->summary.test.mean_rmse, 2.0 * projection) << r->method;
+        EXPECT_LT(r->summary.test.final_rmse, 2.0 * projection) << r->method;
+    }
     std::printf("[ figures  ] small cantilever 300 frames: autoencoder projection RMSE %.5f, fulton_full test-window RMSE %.5f (%.2f "
                 "it/step, %d unconverged, final %.5f), fulton_cubature test-window RMSE %.5f (%zu elements, %.2f it/step, %d unconverged)\n",
                 projection, r_full.summary.test.mean_rmse, full.mean_iterations(), full.unconverged_steps(),

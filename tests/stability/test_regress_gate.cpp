@@ -1,5 +1,5 @@
 // The regression gate end to end, through the CLI as a user runs it: a small
-// cantilever suite (the paper's method and linear PCA) run twice from scratch passes
+// cloth suite (the paper's method and linear PCA) run twice from scratch passes
 // `latentbench regress`; the same suite with the paper's method degraded (2 training
 // epochs) fails with its rows named; the reverse comparison is an improvement, not a
 // failure; a run without one method reports it missing; the JUnit file parses with
@@ -21,8 +21,11 @@ using testing::run_cli;
 using testing::run_program;
 namespace fs = std::filesystem;
 
-/// The suite: experiments/stability.toml's recipe on the small cantilever (1,000 frames,
-/// trained on 100), one seed.
+/// The suite: experiments/stability.toml's recipe on the small cloth (1,500 frames, trained on
+/// 300), one seed. (Not the small cantilever: since the PCA layer is clamped to its training
+/// frames' rank, 10, its 1,500-epoch fit drifts so far that a 2-epoch fit has a lower
+/// training-window error, and "the reverse is an improvement" would not hold; see
+/// results/stability_baseline.)
 std::string suite_text(const std::string& name, const std::string& ours_extra)
 {
     return "name = \"" + name + "\"\n"
@@ -30,7 +33,7 @@ std::string suite_text(const std::string& name, const std::string& ours_extra)
            "[training]\nepochs = 1500\nbatch = 256\nlearning_rate = 1.0e-3\n"
            "[[integrators]]\nname = \"ours\"\nloss = \"self_supervised\"\n" + ours_extra +
            "[[integrators]]\nname = \"linear_pca\"\nmethod = \"linear_pca\"\n"
-           "[[scenes]]\nscene = \"" LB_SOURCE_DIR "/experiments/scenes/cantilever.toml\"\nvariant = \"small\"\n"
+           "[[scenes]]\nscene = \"" LB_SOURCE_DIR "/experiments/scenes/cloth.toml\"\nvariant = \"small\"\n"
            "[evaluation]\nsequences = \"test\"\nfull_space = false\n"
            "[outputs]\nplots = false\nfilmstrips = false\npaper_tables = false\n";
 }
@@ -92,9 +95,9 @@ TEST(StabilityGate, RerunPassesDegradedMethodFailsImprovementPassesMissingIsRepo
     const auto worse = run_cli("regress " + dir + "/degraded --baseline " + dir + "/baseline --junit " + degraded_junit);
     EXPECT_EQ(worse.exit_code, 1) << worse.output;
     EXPECT_NE(worse.output.find("**FAIL**: 2 regressed, 0 improved, 2 unchanged"), std::string::npos) << worse.output;
-    EXPECT_NE(worse.output.find("- cantilever_small / ours / train: "), std::string::npos) << worse.output;
-    EXPECT_NE(worse.output.find("- cantilever_small / ours / test: "), std::string::npos) << worse.output;
-    EXPECT_EQ(worse.output.find("- cantilever_small / linear_pca"), std::string::npos) << worse.output;
+    EXPECT_NE(worse.output.find("- cloth_small / ours / train: "), std::string::npos) << worse.output;
+    EXPECT_NE(worse.output.find("- cloth_small / ours / test: "), std::string::npos) << worse.output;
+    EXPECT_EQ(worse.output.find("- cloth_small / linear_pca"), std::string::npos) << worse.output;
     EXPECT_EQ(python_testcases(degraded_junit), 4);
     std::ifstream in(degraded_junit);
     const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -111,7 +114,7 @@ TEST(StabilityGate, RerunPassesDegradedMethodFailsImprovementPassesMissingIsRepo
     const auto missing = run_cli("regress " + dir + "/subset --baseline " + dir + "/baseline");
     EXPECT_EQ(missing.exit_code, 0) << missing.output;
     EXPECT_NE(missing.output.find("2 unchanged, 2 missing, 0 new"), std::string::npos) << missing.output;
-    EXPECT_NE(missing.output.find("- cantilever_small / linear_pca / test"), std::string::npos) << missing.output;
+    EXPECT_NE(missing.output.find("- cloth_small / linear_pca / test"), std::string::npos) << missing.output;
     const auto strict = run_cli("regress " + dir + "/subset --baseline " + dir + "/baseline --fail-on-missing");
     EXPECT_EQ(strict.exit_code, 1) << strict.output;
 }
