@@ -373,7 +373,8 @@ public:
             return m_trainer.loss_and_gradient(m_model, m_batch);
         } catch (const NonFinitePotential& e) {
             const Index column = std::clamp<Index>(e.column, 0, m_batch.size() - 1);
-            throw NumericalError("non-finite incremental potential (" + std::to_string(e.value) + ") at training sample " +
+            throw NumericalError("non-finite incremental potential (" + NonFinitePotential::text(e.value) +
+                                 ") at training sample " +
                                  std::to_string(m_batch.source[std::size_t(column)]) + " of " +
                                  std::to_string(m_samples.size()) +
                                  " (the decoded state of the network's prediction, or its inertia target, is not finite)");

@@ -36,14 +36,16 @@ namespace lb {
 class NonFinitePotential : public NumericalError {
 public:
     NonFinitePotential(Index column, double value)
-        : NumericalError("non-finite incremental potential (" + std::to_string(value) + ") in column " +
-                         std::to_string(column) + " of the training batch"),
+        : NumericalError("non-finite incremental potential (" + text(value) + ") in column " + std::to_string(column) +
+                         " of the training batch"),
           column(column),
           value(value)
     {
     }
     Index column;
     double value;
+    /// "NaN", "inf" or "-inf" (std::to_string writes "-nan" for some NaNs).
+    static std::string text(double value) { return value != value ? "NaN" : value > 0 ? "inf" : "-inf"; }
 };
 
 /// What evaluate() computes besides the per-sample energies.
