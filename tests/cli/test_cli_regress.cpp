@@ -18,6 +18,7 @@ namespace {
 using testing::fresh_dir;
 using testing::run_cli;
 using testing::run_program;
+using testing::python_testcases;
 namespace fs = std::filesystem;
 
 /// A 60-frame rollout with relative RMSE `rmse`, non-finite from `stop` (0: never).
@@ -58,25 +59,6 @@ std::string write_run(const std::string& name, double ours_rmse, Index ours_stop
     return dir;
 }
 
-/// Testcases in a JUnit file, counted by Debian's Python (xml.etree), or -1 if it does not parse.
-int python_testcases(const std::string& junit)
-{
-    const std::string out = junit + ".count";
-    const auto result = run_program({"/usr/bin/python3", "-c",
-                                     "import sys, xml.etree.ElementTree as ET\n"
-                                     "root = ET.parse(sys.argv[1]).getroot()\n"
-                                     "assert root.tag == 'testsuites', root.tag\n"
-                                     "open(sys.argv[2], 'w').write(str(len(list(root.iter('testcase')))))\n",
-                                     junit, out});
-    if (result.exit_code != 0) {
-        ADD_FAILURE() << "python3 could not parse " << junit << ":\n" << result.output;
-        return -1;
-    }
-    std::ifstream in(out);
-    int n = -1;
-    in >> n;
-    return n;
-}
 
 TEST(CliRegress, IdenticalRunPassesWithJunit)
 {

@@ -19,6 +19,7 @@ namespace {
 using testing::fresh_dir;
 using testing::run_cli;
 using testing::run_program;
+using testing::python_testcases;
 namespace fs = std::filesystem;
 
 /// The suite: experiments/stability.toml's recipe on the small cloth (1,500 frames, trained on
@@ -51,24 +52,6 @@ void run_suite(const std::string& suite, const std::string& out, const std::stri
     ASSERT_EQ(r.exit_code, 0) << r.output;
 }
 
-int python_testcases(const std::string& junit)
-{
-    const std::string out = junit + ".count";
-    const auto r = run_program({"/usr/bin/python3", "-c",
-                                "import sys, xml.etree.ElementTree as ET\n"
-                                "root = ET.parse(sys.argv[1]).getroot()\n"
-                                "assert root.tag == 'testsuites', root.tag\n"
-                                "open(sys.argv[2], 'w').write(str(len(list(root.iter('testcase')))))\n",
-                                junit, out});
-    if (r.exit_code != 0) {
-        ADD_FAILURE() << "python3 could not parse " << junit << ":\n" << r.output;
-        return -1;
-    }
-    std::ifstream in(out);
-    int n = -1;
-    in >> n;
-    return n;
-}
 
 TEST(StabilityGate, RerunPassesDegradedMethodFailsImprovementPassesMissingIsReported)
 {

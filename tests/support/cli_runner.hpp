@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "core/process.hpp"
 
 namespace lb::testing {
@@ -62,6 +64,27 @@ inline std::string write_in_fresh_dir(const std::string& dir, const std::string&
     const std::string path = fresh_dir(dir) + "/" + file;
     write_file(path, text);
     return path;
+}
+
+/// Testcases in a JUnit file, counted by Debian's Python (xml.etree), or -1 (with a test
+/// failure) if it does not parse.
+inline int python_testcases(const std::string& junit)
+{
+    const std::string out = junit + ".count";
+    const auto result = run_program({"/usr/bin/python3", "-c",
+                                     "import sys, xml.etree.ElementTree as ET\n"
+                                     "root = ET.parse(sys.argv[1]).getroot()\n"
+                                     "assert root.tag == 'testsuites', root.tag\n"
+                                     "open(sys.argv[2], 'w').write(str(len(list(root.iter('testcase')))))\n",
+                                     junit, out});
+    if (result.exit_code != 0) {
+        ADD_FAILURE() << "python3 could not parse " << junit << ":\n" << result.output;
+        return -1;
+    }
+    std::ifstream in(out);
+    int n = -1;
+    in >> n;
+    return n;
 }
 
 } // namespace lb::testing
