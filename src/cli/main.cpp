@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "core/allocator.hpp"
+#include "core/build_info.hpp"
 #include "core/error.hpp"
 #include "core/limits.hpp"
 #include "core/log.hpp"
@@ -40,6 +41,7 @@ int main(int argc, char** argv)
 {
     ensure_thread_environment(argv);
     lb::keep_freed_memory();
+    lb::set_command_line(argc, argv);
     CLI::App app{"latentbench: latent-space integrators for deformable simulation, benchmarked"};
     app.require_subcommand(1);
     bool quiet = false, verbose = false;
