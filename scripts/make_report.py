@@ -99,10 +99,13 @@ def tables():
 #       text columns (the table's left-aligned ones: method, window, stage, example, ...) match
 #       every '|'-separated part of `row` (a part matches a cell equal to it or beginning with
 #       it and a space: "test" matches "test (frames >= 780)", "ours" matches "ours (stable 1500)"
-#       but not "ours_mean_speed"), and the column titled `col`. `table=N` picks the N-th table
+#       but not "ours_mean_speed"; when several rows match, those whose first text column equals
+#       the first part), and the column titled `col`. `table=N` picks the N-th table
 #       (from 1) of a file that has several. `part`: all (default: the whole cell), value (its
 #       leading number), range ("[min, max]"), min, max, pm (what follows "±"), note (the text in
 #       the trailing parentheses).
+#   {{table SUITE/STEM}}   (expands to nothing) the table of the {{cell}} and [REF] references
+#       that follow without a SUITE/STEM of their own, up to the next {{table}}
 #   {{ratio [REF] [REF] digits=3}}   first value over second, `digits` significant digits
 #   {{orders [REF] [REF] digits=3}}  log10 of that ratio, `digits` decimals
 #   {{sum [REF] [REF] ... digits=3}} the values' sum; REF is a cell reference without "cell"
@@ -202,9 +205,10 @@ class Tables:
             if col not in header:
                 continue
             c = header.index(col)
-            for r in rows:
-                if all(any(cell_matches(p, r[k]) for k in keys) for p in parts):
-                    hits.append(r[c])
+            matched = [r for r in rows if all(any(cell_matches(p, r[k]) for k in keys) for p in parts)]
+            if len(matched) > 1:  # "supervised_l2" is also the start of other rows' configuration
+                matched = [r for r in matched if r[keys[0]] == parts[0]] or matched
+            hits += [r[c] for r in matched]
         if not hits:
             titles = sorted({h for header, _, _ in tables for h in header})
             if not any(col in header for header, _, _ in tables):
@@ -290,11 +294,14 @@ class Expander:
         self.root = root
         self.tables = Tables(root)
         self.bench_cache = {}
+        self.default_table = None
 
     def ref(self, body, where, default_part):
         words, options = parse_args(body, where)
         plain = [w for kind, w in words if kind == "word"]
-        if len(plain) != 1 or len(words) != 1:
+        if not words and self.default_table:
+            plain = [self.default_table]
+        elif len(plain) != 1 or len(words) != 1:
             raise ReportError(f"{where}: a cell reference is SUITE/STEM row=\"...\" col=\"...\"")
         for key in options:
             if key not in ("row", "col", "part", "table"):
@@ -326,6 +333,12 @@ class Expander:
         if kind == "cell":
             return self.ref(body, where, "all")
         words, options = parse_args(body, where)
+        if kind == "table":
+            if len(words) != 1 or words[0][0] != "word" or options:
+                raise ReportError(f"{where}: {{{{table SUITE/STEM}}}} names one table")
+            table_path(self.root, words[0][1])
+            self.default_table = words[0][1]
+            return ""
         if kind in ("paper", "def"):
             text = body.strip()
             if not text:

@@ -156,7 +156,7 @@ class StaleTable(unittest.TestCase):
 
             # The first {{cell}} of the source: find its cell in the copy and change its text.
             source = (root / "paper" / "REPORT.src.md").read_text(encoding="utf-8")
-            m = re.search(r"\{\{cell\s+(\S+)(.*?)\}\}", source, re.S)
+            m = re.search(r"\{\{cell\s+([\w.-]+/[\w.-]+)(\s.*?)\}\}", source, re.S)
             self.assertIsNotNone(m, "the source has no {{cell}} reference")
             words, options = make_report.parse_args(m.group(1) + m.group(2), "test")
             table = pathlib.Path(make_report.table_path(str(root), words[0][1]))
