@@ -111,7 +111,8 @@ def tables():
 #   {{sum [REF] [REF] ... digits=3}} the values' sum; REF is a cell reference without "cell"
 #   {{bench FILE NAME field=real_time unit=us digits=3}}
 #       a Google Benchmark figure of results/bench/FILE (a .json; NAME is the benchmark's name,
-#       its _median aggregate when the file has repetitions)
+#       its _median aggregate when the file has repetitions); FILE `latest` is the file whose
+#       context has the latest date, and {{benchfile latest}} expands to its path
 #   {{paper 136.8}}   a number quoted from Li et al. 2025 (expands to the text)
 #   {{def 10,000}}    a definition or setting, not a measurement: epochs, learning rates,
 #                     thresholds, scene sizes, seed counts (expands to the text)
@@ -316,6 +317,8 @@ class Expander:
         if len(words) != 2 or any(kind != "word" for kind, _ in words):
             raise ReportError(f"{where}: bench needs FILE NAME")
         file, name = words[0][1], words[1][1]
+        if file == "latest":
+            file = latest_bench(self.root)
         path = os.path.join(self.root, "results", "bench", file)
         if path not in self.bench_cache:
             self.bench_cache[path] = load_bench(path)
@@ -324,6 +327,8 @@ class Expander:
             raise ReportError(f"{where}: results/bench/{file} has no benchmark '{name}'")
         field = options.get("field", "real_time")
         row = rows[name]
+        if row["error"]:
+            raise ReportError(f"{where}: results/bench/{file}: benchmark '{name}' did not run: {row['error']}")
         if field not in ("real_time", "cpu_time"):
             raise ReportError(f"{where}: field={field} (real_time or cpu_time)")
         value = row[field] * TIME_UNITS[row["unit"]] / TIME_UNITS[options.get("unit", row["unit"])]
@@ -344,6 +349,10 @@ class Expander:
             if not text:
                 raise ReportError(f"{where}: empty {{{{{kind}}}}}")
             return text
+        if kind == "benchfile":
+            if [w for _, w in words] != ["latest"] or options:
+                raise ReportError(f"{where}: {{{{benchfile latest}}}} takes no other argument")
+            return "results/bench/" + latest_bench(self.root)
         if kind == "bench":
             if "unit" in options and options["unit"] not in TIME_UNITS:
                 raise ReportError(f"{where}: unit={options['unit']} (ns, us, ms, s)")
@@ -443,7 +452,8 @@ def load_bench(path):
         if unit not in TIME_UNITS:
             raise ReportError(f"{rel}: benchmark '{name}' has time_unit '{unit}'")
         family = name.split("/")[0]
-        entry = {"real_time": real, "cpu_time": cpu, "unit": unit, "family": family}
+        entry = {"real_time": real, "cpu_time": cpu, "unit": unit, "family": family,
+                 "error": b.get("error_message", "error") if b.get("error_occurred") else None}
         if b.get("run_type") == "aggregate":
             if b.get("aggregate_name") == "median":
                 rows[name] = dict(entry, repetitions=b.get("repetitions"), source="median")
@@ -457,6 +467,15 @@ def load_bench(path):
                    for f in ("real_time", "cpu_time")}
             rows[name] = dict(runs[0], **med, repetitions=len(runs), source="runs")
     return {"rows": rows, "context": data["context"]}
+
+
+def latest_bench(root):
+    """The results/bench/*.json file whose context has the latest date."""
+    bench_dir = os.path.join(root, "results", "bench")
+    files = sorted(f for f in os.listdir(bench_dir) if f.endswith(".json")) if os.path.isdir(bench_dir) else []
+    if not files:
+        raise ReportError("no results/bench/*.json")
+    return max(files, key=lambda f: (str(load_bench(os.path.join(bench_dir, f))["context"].get("date", "")), f))
 
 
 def bench_commit(path, context):
@@ -500,8 +519,13 @@ def render_performance(root):
             parts.append(f"\n### {family}\n\n| benchmark | real time | CPU time | unit | repetitions |\n"
                          "|:--|--:|--:|:--|--:|\n")
             for name, row in sorted(families[family]):
+                if row["error"]:
+                    message = row["error"].replace("|", "/")
+                    parts.append(f"| `{name}` | did not run: {message} | | | |\n")
+                    continue
+                reps = f"{row['repetitions']}" if row["source"] == "median" else f"{row['repetitions']} (median of the runs; no aggregate)"
                 parts.append(f"| `{name}` | {sig(row['real_time'], 4)} | {sig(row['cpu_time'], 4)} | "
-                             f"{row['unit']} | {row['repetitions'] if row['repetitions'] else '—'} |\n")
+                             f"{row['unit']} | {reps} |\n")
     return "".join(parts)
 
 
