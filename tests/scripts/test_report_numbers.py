@@ -35,7 +35,7 @@ import make_report  # noqa: E402
 ARGS = None
 # A number as prose writes it: 1,500 / 0.0692 / 8.32e-05 / 2.3e5 / −0.1.
 NUMBER = re.compile(r"(?<![\d.,])[−-]?\d+(?:,\d{3})*(?:\.\d+)?(?:[eE][-+]?\d+)?")
-CITATION = re.compile(r"(?:\b(?:Figs?\.|Tables?|Eqs?\.|Sections?|issues?|Issue|commits?|stages?|et al\.,?)|§)\s*"
+CITATION = re.compile(r"(?:\b(?:Figs?\.|Tables?|Eqs?\.|Sections?|issues?|Issue|commits?|stages?|generation|et al\.,?)|§)\s*"
                       r"\d+(?:\.\d+)*(?:\s*(?:–|-|,|and|/)\s*\d+(?:\.\d+)*)*")
 DATE = re.compile(r"\b\d{4}-\d{2}-\d{2}\b")
 HASH = re.compile(r"\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*\d)[0-9a-f]{7,40}\b")
