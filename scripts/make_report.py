@@ -103,7 +103,7 @@ def tables():
 #       the first part), and the column titled `col`. `table=N` picks the N-th table
 #       (from 1) of a file that has several. `part`: all (default: the whole cell), value (its
 #       leading number), range ("[min, max]"), min, max, pm (what follows "±"), note (the text in
-#       the trailing parentheses).
+#       the cell's parentheses, several joined by "; ").
 #   {{table SUITE/STEM}}   (expands to nothing) the table of the {{cell}} and [REF] references
 #       that follow without a SUITE/STEM of their own, up to the next {{table}}
 #   {{ratio [REF] [REF] digits=3}}   first value over second, `digits` significant digits
@@ -239,10 +239,10 @@ def cell_part(text, part, where):
             raise ReportError(f"{where}: cell '{text}' has no '±' interval")
         return m.group(1)
     if part == "note":
-        m = re.search(r"\(([^()]*)\)\s*$", text)
-        if not m:
-            raise ReportError(f"{where}: cell '{text}' has no trailing (note)")
-        return m.group(1)
+        notes = re.findall(r"\(([^()]*)\)", text)
+        if not notes:
+            raise ReportError(f"{where}: cell '{text}' has no (note)")
+        return "; ".join(notes)
     raise ReportError(f"{where}: unknown part={part} (all, value, range, min, max, pm, note)")
 
 

@@ -12,10 +12,11 @@ from the paper is {{paper ...}} and a setting or definition {{def ...}}. This te
 - and, on a temporary copy of results/ and paper/, changing one referenced table cell makes
   `make_report.py report --check` fail, and regenerating makes it pass again.
 
-Passages in {{unconverted}} ... {{/unconverted}} are not yet generated; their numbers are listed
-(the output shows a note over each such passage) and fail the test with --strict.
+Passages in {{unconverted}} ... {{/unconverted}} are not generated yet (the output shows a note over
+each): their numbers are listed and fail the test, unless --allow-unconverted is given (for work
+in progress, never in ctest).
 
-  /usr/bin/python3 tests/scripts/test_report_numbers.py [--strict] [--tmp DIR]
+  /usr/bin/python3 tests/scripts/test_report_numbers.py [--allow-unconverted] [--tmp DIR]
 """
 import argparse
 import os
@@ -135,8 +136,8 @@ class ReportNumbers(unittest.TestCase):
             print(f"NOT YET GENERATED: {len(pending)} numbers in {regions} {{{{unconverted}}}} passages of "
                   f"paper/REPORT.src.md (lines {lines[0]}–{lines[-1]}); the output marks each passage",
                   file=sys.stderr)
-        if ARGS.strict:
-            self.assertEqual(pending, [], "--strict: unconverted passages remain")
+        if not ARGS.allow_unconverted:
+            self.assertEqual(pending, [], "{{unconverted}} passages remain (--allow-unconverted lists them only)")
 
 
 class StaleTable(unittest.TestCase):
@@ -197,7 +198,8 @@ class StaleTable(unittest.TestCase):
 def main():
     global ARGS
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--strict", action="store_true", help="unconverted passages fail the test")
+    parser.add_argument("--allow-unconverted", action="store_true",
+                        help="list the numbers of {{unconverted}} passages instead of failing")
     parser.add_argument("--tmp", default=None, help="folder for temporary copies")
     parser.add_argument("--cli", default=None, help="ignored (ctest passes it to every scripts.* test)")
     ARGS, rest = parser.parse_known_args()
