@@ -520,7 +520,8 @@ def render_performance(root):
                          "|:--|--:|--:|:--|--:|\n")
             for name, row in sorted(families[family]):
                 if row["error"]:
-                    message = row["error"].replace("|", "/")
+                    # The file's message may name the measuring machine's absolute paths: keep the file names.
+                    message = re.sub(r"(?<![\w.])/(?:[^\s/']+/)+", "", row["error"]).replace("|", "/")
                     parts.append(f"| `{name}` | did not run: {message} | | | |\n")
                     continue
                 reps = f"{row['repetitions']}" if row["source"] == "median" else f"{row['repetitions']} (median of the runs; no aggregate)"
