@@ -19,6 +19,7 @@ in progress, never in ctest).
   /usr/bin/python3 tests/scripts/test_report_numbers.py [--allow-unconverted] [--tmp DIR]
 """
 import argparse
+import json
 import os
 import pathlib
 import re
@@ -97,6 +98,84 @@ class BareNumbers(unittest.TestCase):
         text = ("Fig. 5 and Figs. 10–11, Table 2, §4.6, issue 39, supervised L2, float32, the 10th "
                 "frame, 2026-12-03, commit d720926, `ours_2000_epochs`, [v](../results/x_1.mp4)")
         self.assertEqual(bare_numbers(text), [])
+
+
+TINY_TABLE = """## Methods on tiny
+
+| method        | configuration      | window               |                 stable (blow-up) |            mean RMSE |
+|:--------------|:-------------------|:---------------------|---------------------------------:|---------------------:|
+| ours          | self_supervised    | train (frames 2-9)   | 90 [80, 100] (1/3 diverged, earliest @80) |  0.5 [0.25, 1] |
+| ours          | self_supervised    | test (frames >= 10)  | 90 [80, 100] (1/3 diverged, earliest @80) | 0.04 [0.02, 0.08] (1/3 diverged, earliest @80) |
+| supervised_l2 | supervised_l2      | test (frames >= 10)  |                      diverged @7 |  0.2 (diverged @7) |
+| ours_wide     | ours wide          | test (frames >= 10)  |                        100 / 100 |               0.0125 |
+"""
+TINY_BENCH = {"context": {"date": "2026-12-05T01:00:00+00:00", "num_cpus": 2},
+              "benchmarks": [
+                  {"name": "fam/a", "run_name": "fam/a", "run_type": "iteration", "real_time": 2000.0,
+                   "cpu_time": 1000.0, "time_unit": "us"},
+                  {"name": "fam/b", "run_name": "fam/b", "run_type": "iteration", "real_time": 0.0,
+                   "cpu_time": 0.0, "time_unit": "ms", "error_occurred": True, "error_message": "no mesh"}]}
+
+
+class Markup(unittest.TestCase):
+    """Each kind of markup on a tiny table and benchmark file."""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory(dir=ARGS.tmp)
+        self.root = pathlib.Path(self.tmp.name)
+        (self.root / "results" / "tiny" / "tables").mkdir(parents=True)
+        (self.root / "results" / "tiny" / "tables" / "methods_tiny.md").write_text(TINY_TABLE, encoding="utf-8")
+        (self.root / "results" / "bench").mkdir()
+        (self.root / "results" / "bench" / "2026-12-05-abc1234.json").write_text(json.dumps(TINY_BENCH), encoding="utf-8")
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def expand(self, source):
+        return "".join(s[2] for s in make_report.segments(source, str(self.root)))
+
+    def test_cells_and_parts(self):
+        t = 'tiny/methods_tiny row="ours|test" col="mean RMSE"'
+        self.assertEqual(self.expand("{{cell %s}}" % t), "0.04 [0.02, 0.08] (1/3 diverged, earliest @80)")
+        self.assertEqual(self.expand("{{cell %s part=value}}" % t), "0.04")
+        self.assertEqual(self.expand("{{cell %s part=range}}" % t), "[0.02, 0.08]")
+        self.assertEqual(self.expand("{{cell %s part=max}}" % t), "0.08")
+        self.assertEqual(self.expand("{{cell %s part=note}}" % t), "1/3 diverged, earliest @80")
+        self.assertEqual(self.expand('{{table tiny/methods_tiny}}{{cell row="supervised_l2|test" col="stable (blow-up)" part=value}}'), "7")
+        # "ours" is not the start of "ours_wide", and a bare "ours" matches two windows.
+        self.assertEqual(self.expand('{{cell tiny/methods_tiny row="ours_wide" col="mean RMSE"}}'), "0.0125")
+        with self.assertRaisesRegex(make_report.ReportError, "matches 2 rows"):
+            self.expand('{{cell tiny/methods_tiny row="ours" col="mean RMSE"}}')
+        with self.assertRaisesRegex(make_report.ReportError, "no column 'median RMSE'"):
+            self.expand('{{cell tiny/methods_tiny row="ours|test" col="median RMSE"}}')
+        with self.assertRaisesRegex(make_report.ReportError, "REPORT.src.md:2: .*no row matching 'linear_pca"):
+            self.expand('\n{{cell tiny/methods_tiny row="linear_pca|test" col="mean RMSE"}}')
+
+    def test_derived_numbers(self):
+        a = '[tiny/methods_tiny row="ours|train" col="mean RMSE"]'
+        b = '[tiny/methods_tiny row="ours|test" col="mean RMSE"]'
+        self.assertEqual(self.expand("{{ratio %s %s digits=2}}" % (a, b)), "12")
+        self.assertEqual(self.expand("{{orders %s %s digits=2}}" % (a, b)), "1.10")
+        self.assertEqual(self.expand("{{sum %s %s digits=3}}" % (a, b)), "0.54")
+
+    def test_quotes_definitions_and_benchmarks(self):
+        self.assertEqual(self.expand("{{paper 136.8}} and {{def 10,000}}"), "136.8 and 10,000")
+        self.assertEqual(self.expand("{{bench latest fam/a unit=ms}}"), "2")
+        self.assertEqual(self.expand("{{bench 2026-12-05-abc1234.json fam/a field=cpu_time}}"), "1e+03")
+        self.assertEqual(self.expand("{{benchfile latest}}"), "results/bench/2026-12-05-abc1234.json")
+        with self.assertRaisesRegex(make_report.ReportError, "did not run: no mesh"):
+            self.expand("{{bench latest fam/b}}")
+        text = make_report.render_performance(str(self.root))
+        self.assertIn("commit: abc1234", text)
+        self.assertIn("| `fam/a` | 2000 | 1000 | us | 1 |", text)
+        self.assertIn("did not run: no mesh", text)
+
+    def test_bad_benchmark_file_names_it_and_writes_nothing(self):
+        (self.root / "results" / "bench" / "broken.json").write_text("{not json", encoding="utf-8")
+        p = run("--root", self.root, "performance")
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("broken.json is not JSON", p.stderr)
+        self.assertFalse((self.root / "paper" / "performance.md").exists())
 
 
 class ReportNumbers(unittest.TestCase):
