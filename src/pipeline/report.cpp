@@ -9,6 +9,7 @@
 
 #include "eval/summary_schema.hpp"
 #include "io/table.hpp"
+#include "io/table_data.hpp"
 #include "paper/paper_numbers.hpp"
 #include "pipeline/deviations.hpp"
 #include "pipeline/plan.hpp"
@@ -296,7 +297,10 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
 {
     std::filesystem::create_directories(dir);
     std::vector<std::string> written;
-    auto emit = [&](const Table& t, const std::string& stem) { written.push_back(write_table_files(t, dir + "/" + stem).front()); };
+    auto emit = [&](const Table& t, const std::string& stem) {
+        written.push_back(write_table_files(t, dir + "/" + stem).front());
+        write_table_data(t, dir + "/" + stem);  // the suite page's source (pipeline/html_page.hpp)
+    };
     for (const SceneResult& r : scenes) {
         // The deviations from the paper's recipe, from the resolved settings (issue 39).
         for (const SceneSpec& spec : ex.scenes) {
