@@ -2,7 +2,8 @@
 """Publish experiment results and assemble the paper report's tables.
 
   make_report.py publish RUN_DIR NAME   copy RUN_DIR/tables/*, RUN_DIR/figures/**/*.png and RUN_DIR/videos/*.mp4 into
-                                        results/NAME/ (the committed reference results)
+                                        results/NAME/ (the committed reference results), with the
+                                        suite page (index.html), experiment.toml and provenance.toml
   make_report.py tables                 write paper/tables.md: every results/*/tables/*.md, Tables 1
                                         and 2 first, then method comparisons, then ablations
 
@@ -46,7 +47,7 @@ def publish(run_dir, name):
                 os.makedirs(os.path.join(out, "videos"), exist_ok=True)
                 shutil.copy2(os.path.join(videos, f), os.path.join(out, "videos", f))
                 video_count += 1
-    for extra in ("experiment.toml",):
+    for extra in ("experiment.toml", "provenance.toml", "index.html"):  # the suite page and what it shows
         if os.path.exists(os.path.join(run_dir, extra)):
             shutil.copy2(os.path.join(run_dir, extra), out)
     print(f"published {run_dir} -> {out} ({len(os.listdir(os.path.join(out, 'tables')))} table files, {count} figures, {video_count} videos)")
