@@ -15,6 +15,7 @@ Exits 77 (ctest's SKIP_RETURN_CODE) with a message if chromium, chromedriver, se
 ffmpeg is missing.
 """
 import argparse
+import base64
 import os
 import re
 import shutil
@@ -154,23 +155,48 @@ class SuitePageTest(unittest.TestCase):
             driver.quit()
         shutil.rmtree(getattr(cls, "profile", ""), ignore_errors=True)
 
+    def test_page_command_rebuilds_the_page_and_a_listing(self):
+        # `latentbench page` rewrites the page from the folder alone, and links it from a listing.
+        listing = os.path.join(self.work, "index.html")
+        out = run([ARGS.cli, "page", self.run_dir, "--listing", listing])
+        self.assertIn(f"wrote {self.page}", out)
+        with open(self.page, encoding="utf-8") as f:
+            rebuilt = f.read()
+        strip = lambda html: re.sub(r"Page written by latentbench on [^<]*", "", html)
+        self.assertEqual(strip(rebuilt), strip(self.html), "the rebuilt page differs from the run's")
+        self.driver.get("file://" + urllib.parse.quote(listing))
+        links = self.driver.execute_script(
+            "return Array.from(document.querySelectorAll('#suites a')).map(a => a.href);")
+        self.assertIn("file://" + urllib.parse.quote(os.path.abspath(self.page)), links)
+        self.assertEqual([e for e in self.driver.get_log("browser") if e["level"] == "SEVERE"], [])
+        self.driver.get("file://" + urllib.parse.quote(os.path.abspath(self.page)))
+        self.wait_for_media()
+        # a folder that is not a suite's: exit 1, the folder named, nothing written
+        empty = tempfile.mkdtemp(prefix="not_a_suite_", dir=self.work)
+        p = subprocess.run([ARGS.cli, "page", empty], capture_output=True, text=True)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn(empty, p.stderr)
+        self.assertFalse(os.path.exists(os.path.join(empty, "index.html")))
+        shutil.rmtree(empty)
+
     def test_zz_screenshot(self):
-        """Last (tests run in name order): the page as a test artefact, top first."""
+        """Last (tests run in name order): the page as a test artefact, from the top."""
         os.makedirs(ARGS.artefacts, exist_ok=True)
         shot = os.path.join(ARGS.artefacts, "suite_page.png")
         if os.path.exists(shot):
             os.remove(shot)
         self.driver.execute_script("window.scrollTo(0, 0)")
-        height = int(self.driver.execute_script("return document.documentElement.scrollHeight"))
-        # The whole page up to 12,000 px (a taller window can time the renderer out on a
-        # loaded machine); the window's view if even that fails.
+        # The whole page (up to 12,000 px) through the DevTools protocol, which renders beyond
+        # the window; the window's view if that fails (a loaded machine can time it out).
         try:
-            self.driver.set_window_size(1400, min(height + 40, 12000))
-            time.sleep(0.5)
-            self.driver.save_screenshot(shot)
+            size = self.driver.execute_cdp_cmd("Page.getLayoutMetrics", {})["cssContentSize"]
+            clip = {"x": 0, "y": 0, "width": 1400, "height": min(size["height"], 12000), "scale": 1}
+            data = self.driver.execute_cdp_cmd("Page.captureScreenshot",
+                                               {"format": "png", "captureBeyondViewport": True, "clip": clip})["data"]
+            with open(shot, "wb") as f:
+                f.write(base64.b64decode(data))
         except Exception as e:  # selenium's TimeoutException and WebDriverException alike
             print(f"full-page screenshot failed ({type(e).__name__}); taking the 1400x1000 view")
-            self.driver.set_window_size(1400, 1000)
             self.driver.save_screenshot(shot)
         with open(shot, "rb") as f:
             self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n", "the screenshot is not a PNG")
