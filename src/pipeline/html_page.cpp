@@ -459,9 +459,11 @@ std::string provenance_html(const Suite& s)
                  {"machine", or_unknown(get("machine"))}, {"date", or_unknown(get("date"))}};
     } else {
         // A published folder: the last commit that changed it, and the tables' own notes.
-        const std::string commit = output_of({kGit, "-C", s.dir, "log", "-1", "--format=%H (%cd)", "--date=iso", "--", "."});
+        // (the page itself aside, or committing it would name its own commit)
+        const std::string commit =
+            output_of({kGit, "-C", s.dir, "log", "-1", "--format=%H (%cd)", "--date=iso", "--", ".", ":(exclude)index.html"});
         items.push_back({"commit", commit.empty() ? "not known (no provenance.toml, and no git commit has changed this folder)"
-                                                  : commit + " — the last commit that changed this folder before this page was written"});
+                                                  : commit + " — the last commit that changed this folder's outputs"});
         items.push_back({"command", "not recorded (no provenance.toml in this folder)"});
         std::string note;
         for (const SceneFiles& f : s.scenes) {
