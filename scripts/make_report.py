@@ -2,8 +2,9 @@
 """Publish experiment results and assemble the paper report's tables.
 
   make_report.py publish RUN_DIR NAME   copy RUN_DIR/tables/*, RUN_DIR/figures/**/*.png, RUN_DIR/videos/*.mp4,
-                                        experiment.toml and provenance.json into results/NAME/ (the committed
-                                        reference results; absolute paths under the repository made relative)
+                                        experiment.toml, provenance.json and the suite page (index.html) into
+                                        results/NAME/ (the committed reference results; absolute paths under the
+                                        repository made relative)
   make_report.py tables                 write paper/tables.md: every results/*/tables/*.md, Tables 1
                                         and 2 first, then method comparisons, then ablations
   make_report.py report [--check]       write paper/REPORT.md from paper/REPORT.src.md, every measured
@@ -57,7 +58,7 @@ def publish(run_dir, name):
                 os.makedirs(os.path.join(out, "videos"), exist_ok=True)
                 shutil.copy2(os.path.join(videos, f), os.path.join(out, "videos", f))
                 video_count += 1
-    for extra in ("experiment.toml", "provenance.json"):
+    for extra in ("experiment.toml", "provenance.json", "index.html"):  # index.html: the suite page
         if os.path.exists(os.path.join(run_dir, extra)):
             shutil.copy2(os.path.join(run_dir, extra), out)
     if not os.path.exists(os.path.join(out, "provenance.json")):

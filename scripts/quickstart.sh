@@ -12,4 +12,5 @@ cd "$root"
 "$build_dir/latentbench" run experiments/quickstart.toml -o runs/quickstart "$@"
 echo
 echo "quickstart tables (Markdown; CSV and LaTeX beside them): $root/runs/quickstart/tables/"
+echo "quickstart page (tables, figures and videos in one page): $root/runs/quickstart/index.html"
 echo "quickstart figures (PNG): $root/runs/quickstart/figures/"

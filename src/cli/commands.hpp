@@ -27,6 +27,7 @@ void register_train_ae(CLI::App& app);
 void register_plan(CLI::App& app);
 void register_submit(CLI::App& app);
 void register_regress(CLI::App& app);
+void register_page(CLI::App& app);
 
 /// The exit status a command reports without an error (e.g. `regress`: 1 when the gate
 /// fails); 0 unless a command sets it. main returns it after a successful parse.

@@ -66,6 +66,7 @@ int main(int argc, char** argv)
     lb::cli::register_plan(app);
     lb::cli::register_submit(app);
     lb::cli::register_regress(app);
+    lb::cli::register_page(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -16,6 +16,7 @@
 #include "eval/summary_schema.hpp"
 #include "io/atomic_file.hpp"
 #include "io/table.hpp"
+#include "io/table_data.hpp"
 #include "paper/paper_numbers.hpp"
 #include "pipeline/deviations.hpp"
 #include "pipeline/plan.hpp"
@@ -371,6 +372,7 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
         if (csv) csv->add_note(suite_note);
         write_csv(csv ? *csv : t, path + ".csv");
         write_latex(t, path + ".tex");
+        write_table_data(t, path);  // the suite page's source (pipeline/html_page.hpp)
         written.push_back(path + ".md");
     };
     for (const SceneResult& r : scenes) {

@@ -16,9 +16,11 @@
 #include "eval/rollout.hpp"
 #include "io/atomic_file.hpp"
 #include "io/hdf5.hpp"
+#include "io/table_data.hpp"
 #include "methods/artefact.hpp"
 #include "nn/inference_network.hpp"
 #include "pipeline/experiment.hpp"
+#include "pipeline/html_page.hpp"
 #include "pipeline/plan.hpp"
 #include "pipeline/plots.hpp"
 #include "pipeline/report.hpp"
@@ -230,7 +232,9 @@ public:
                 for (RolloutRecord& r : records) r.method = label;
                 diagnosis.add_rollout(records);
             }
-            write_table_files(diagnosis.table(ls.data.scene_name), stem);
+            const Table table = diagnosis.table(ls.data.scene_name);
+            write_table_files(table, stem);
+            write_table_data(table, stem);
         });
         return {stem + ".md"};
     }
@@ -498,6 +502,8 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
         }
         log_info("[videos] %zu videos in %s/videos", result.videos.size(), result.run_dir.c_str());
     }
+    // One web page of everything above, read back from the files just written.
+    log_info("[page] %s", write_suite_page(result.run_dir).c_str());
 }
 
 /// What every entry point does first: the run directory, its log, the plan.
