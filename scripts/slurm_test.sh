@@ -188,6 +188,10 @@ if [[ "${restarts:-0}" -lt 1 || -z "$stopped_at" || -z "$resumed_at" || "$resume
   exit 1
 fi
 grep -qx done "$state/run-slurm/units/$preempt_unit.status" || { log "unit $preempt_unit: status not done"; exit 1; }
+# Slurm's output of the task keeps both runs (the arrays append): the stop, then the resume.
+task_out="$state/run-slurm/slurm/level1-${level1_job}_${preempt_index}.out"
+grep -q "stopped by SIGTERM after epoch $stopped_at of" "$task_out" && grep -q "at epoch $resumed_at\$" "$task_out" ||
+  { log "$task_out lacks the first run's stop or the second run's resume (not appended?)"; exit 1; }
 
 # ---- stop the cluster, run locally, compare ----------------------------------------
 for ((i = ${#pids[@]} - 1; i >= 0; i--)); do kill "${pids[i]}" 2>/dev/null || true; done
