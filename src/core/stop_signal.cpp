@@ -12,6 +12,7 @@ namespace {
 // Lock-free atomics: the only state the handler touches (async-signal-safe).
 std::atomic<int> g_stop_points{0};
 std::atomic<int> g_signal{0};
+std::atomic<unsigned> g_seen{0};  ///< bit s: signal s arrived inside a stop point, not yet taken
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free atomics");
 
 constexpr int kStopSignals[] = {SIGTERM, SIGINT};
@@ -26,10 +27,16 @@ void set_default(int signal)
 
 extern "C" void on_stop_signal(int signal)
 {
-    int none = 0;
-    if (g_stop_points.load() > 0 && g_signal.compare_exchange_strong(none, signal)) return;
-    // Outside a stop point, or a second signal: the default action. The signal is blocked
-    // while its handler runs, so the raise is delivered as the handler returns.
+    const unsigned bit = 1u << unsigned(signal);
+    if (g_stop_points.load() > 0 && !(g_seen.fetch_or(bit) & bit)) {
+        // The first of this signal: stop at the safe point. Another kind of signal while one
+        // is pending (Ctrl-C's SIGINT, then a driver's SIGTERM to its children) adds nothing.
+        int none = 0;
+        g_signal.compare_exchange_strong(none, signal);
+        return;
+    }
+    // Outside a stop point, or the same signal again (Ctrl-C twice): the default action. The
+    // signal is blocked while its handler runs, so the raise is delivered as it returns.
     set_default(signal);
     raise(signal);
 }
@@ -61,7 +68,11 @@ StopPoint::~StopPoint()
 
 int pending_stop_signal() { return g_signal.load(); }
 
-int take_stop_signal() { return g_signal.exchange(0); }
+int take_stop_signal()
+{
+    g_seen.store(0);
+    return g_signal.exchange(0);
+}
 
 std::string signal_name(int signal)
 {

@@ -4,8 +4,9 @@
 // default), Ctrl-C sends SIGINT. Inside a stop point (a training loop) the signal only
 // sets a flag: the loop finishes its epoch, writes its checkpoint and throws Stopped;
 // `latentbench` prints the message and then terminates by the same signal, so a requeued
-// or rerun job resumes from that epoch. Outside a stop point, and at a second signal, the
-// signal terminates the process at once, as it would without the handlers.
+// or rerun job resumes from that epoch. Outside a stop point, and when the same signal comes
+// again (Ctrl-C twice), it terminates the process at once, as it would without the handlers;
+// SIGTERM after SIGINT (or the reverse) waits for the safe point like the first.
 #include <string>
 
 #include "core/error.hpp"

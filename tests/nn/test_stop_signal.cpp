@@ -1,7 +1,7 @@
 // SIGTERM/SIGINT during training (core/stop_signal.hpp): the loop finishes the epoch,
 // checkpoints it and throws Stopped; rerun, it resumes there and ends where an
-// uninterrupted run ends. Outside a training loop, and at a second signal, the signal
-// terminates the process as it would without the handlers.
+// uninterrupted run ends. Outside a training loop, and when the same signal comes again,
+// the signal terminates the process as it would without the handlers.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -109,7 +109,7 @@ TEST(StopSignalDeathTest, OutsideTrainingTheSignalTerminates)
             std::exit(0);
         },
         ::testing::KilledBySignal(SIGTERM), "");
-    // A second signal inside a stop point does not wait for the safe point.
+    // The same signal twice inside a stop point does not wait for the safe point.
     EXPECT_EXIT(
         {
             install_stop_handlers();
@@ -119,6 +119,17 @@ TEST(StopSignalDeathTest, OutsideTrainingTheSignalTerminates)
             std::exit(0);
         },
         ::testing::KilledBySignal(SIGINT), "");
+    // The other signal while one is pending (Ctrl-C's SIGINT, then a driver's SIGTERM to its
+    // children) waits for the safe point too.
+    EXPECT_EXIT(
+        {
+            install_stop_handlers();
+            StopPoint point;
+            ::raise(SIGINT);
+            ::raise(SIGTERM);
+            std::exit(take_stop_signal() == SIGINT ? 0 : 3);
+        },
+        ::testing::ExitedWithCode(0), "");
     // A signal no loop took is not lost: leaving the stop point terminates.
     EXPECT_EXIT(
         {
