@@ -2,9 +2,11 @@
 # A real Slurm for the tests (README, "Running on a cluster"): starts munged, slurmctld
 # and slurmd for a one-node cluster on localhost (2 CPUs, generated slurm.conf, all state
 # in a temporary directory), submits tests/slurm/slurm_suite.toml with `latentbench
-# submit`, waits for its merge job, stops the daemons, runs the same suite locally with
-# `latentbench run` and checks that the merged tables equal the local ones in every
-# column except timings (scripts/compare_tables.py).
+# submit`, requeues the suite's long fit unit while it trains (`scontrol requeue`, as
+# pre-emption does: SIGTERM, then the task runs again) and checks that the requeued task
+# resumed from the checkpoint of the epoch it stopped at, waits for its merge job, stops the
+# daemons, runs the same suite locally with `latentbench run` and checks that the merged
+# tables equal the local ones in every column except timings (scripts/compare_tables.py).
 #   usage: scripts/slurm_test.sh BUILD_DIR      (scripts/run slurm-test; ctest -L slurm)
 # Needs root (or sudo) to install slurm-wlm and munge from Debian if missing; the
 # daemons run as the calling user. Exit 0 on success, 1 on a difference or failure,
@@ -85,7 +87,8 @@ SlurmdUser=$user
 SlurmctldPort=$port_ctld
 SlurmdPort=$port_d
 AuthType=auth/munge
-AuthInfo=socket=$socket
+# cred_expire: a requeued job waits this long (default 120 s) before it runs again.
+AuthInfo=socket=$socket,cred_expire=30
 CredType=cred/munge
 StateSaveLocation=$state/ctld
 SlurmdSpoolDir=$state/spool
@@ -126,6 +129,33 @@ log "node $node idle"
 merge_job="$(sed -n 's/^submitted merge: job \([0-9]*\)$/\1/p' "$state/submit.txt")"
 [[ -n "$merge_job" ]] || { log "no merge job id in the submit output"; exit 1; }
 deadline=$(($(date +%s) + timeout))
+
+# ---- pre-empt the long fit while it trains ------------------------------------------
+# tests/slurm/slurm_suite.toml has one fit long enough (tens of seconds) to be caught
+# mid-training. Its array task is requeued once its log shows finished epochs (a progress
+# line "epoch k/N", k > 0): Slurm sends SIGTERM, latentbench checkpoints the epoch it is in
+# and stops, and the task runs again after cred_expire.
+preempt_unit="fit.cantilever_small.ours_long"
+level1_job="$(sed -n 's/^level 1 ([0-9]* units) \([0-9]*\)$/\1/p' "$state/run-slurm/slurm/jobs.txt")"
+preempt_index="$(/usr/bin/python3 -c '
+import json, sys
+for line in open(sys.argv[1]):
+    unit = json.loads(line)
+    if unit["id"] == sys.argv[2]:
+        print(unit["array_index"])' "$state/run-slurm/manifest.jsonl" "$preempt_unit")"
+[[ -n "$level1_job" && -n "$preempt_index" ]] || { log "no level-1 job or no unit $preempt_unit in the manifest"; exit 1; }
+preempt_task="${level1_job}_${preempt_index}"
+unit_log="$state/run-slurm/units/$preempt_unit.log"
+until grep -Eq 'epoch [1-9][0-9]*/[0-9]+ ' "$unit_log" 2>/dev/null; do
+  if grep -qx done "$state/run-slurm/units/$preempt_unit.status" 2>/dev/null; then
+    log "unit $preempt_unit finished before it could be requeued: lengthen its training"; exit 1
+  fi
+  (($(date +%s) < deadline)) || { log "timed out waiting for unit $preempt_unit to train"; exit 1; }
+  sleep 0.5
+done
+scontrol requeue "$preempt_task"
+log "requeued task $preempt_task (unit $preempt_unit) at its log's $(grep -Eo 'epoch [0-9]+/[0-9]+' "$unit_log" | tail -1)"
+
 while :; do
   job_state="$(scontrol show job "$merge_job" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')"
   case "$job_state" in
@@ -145,6 +175,23 @@ for job in $(awk '{print $NF}' "$state/run-slurm/slurm/jobs.txt"); do
   scontrol -o show job "$job" | awk '{ s = " "; for (i = 1; i <= NF; ++i)
     if ($i ~ /^(JobId|ArrayTaskId|JobName|JobState|ExitCode)=/) s = s " " $i; print s }' >&2 || true
 done
+
+# The requeued task ran twice and its second run resumed where the first stopped (the
+# unit log is appended to by each run).
+restarts="$(scontrol -o show job "$preempt_task" | sed -n 's/.* Restarts=\([0-9]*\).*/\1/p')"
+stopped_at="$(sed -n 's/.*: stopped by SIGTERM after epoch \([0-9]*\) of .*/\1/p' "$unit_log" | head -1)"
+resumed_at="$(sed -n 's/.*: resuming from checkpoint .* at epoch \([0-9]*\)$/\1/p' "$unit_log" | head -1)"
+log "task $preempt_task: Restarts=${restarts:-?}; log: stopped after epoch ${stopped_at:-(none)}, resumed at epoch ${resumed_at:-(none)}"
+if [[ "${restarts:-0}" -lt 1 || -z "$stopped_at" || -z "$resumed_at" || "$resumed_at" -le 0 || "$resumed_at" != "$stopped_at" ]]; then
+  log "the requeued unit did not resume from the checkpoint of the epoch it stopped at; its log:"
+  grep -E 'stopped|resum|checkpoint|unit ' "$unit_log" >&2 || true
+  exit 1
+fi
+grep -qx done "$state/run-slurm/units/$preempt_unit.status" || { log "unit $preempt_unit: status not done"; exit 1; }
+# Slurm's output of the task keeps both runs (the arrays append): the stop, then the resume.
+task_out="$state/run-slurm/slurm/level1-${level1_job}_${preempt_index}.out"
+grep -q "stopped by SIGTERM after epoch $stopped_at of" "$task_out" && grep -q "at epoch $resumed_at\$" "$task_out" ||
+  { log "$task_out lacks the first run's stop or the second run's resume (not appended?)"; exit 1; }
 
 # ---- stop the cluster, run locally, compare ----------------------------------------
 for ((i = ${#pids[@]} - 1; i >= 0; i--)); do kill "${pids[i]}" 2>/dev/null || true; done

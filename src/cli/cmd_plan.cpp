@@ -1,12 +1,37 @@
 #include <cstdio>
+#include <filesystem>
 
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
+#include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/experiment.hpp"
 #include "pipeline/plan.hpp"
 
 namespace lb::cli {
+
+void check_run_directory(const std::string& dir, const std::string& what)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    for (fs::path p = fs::path(dir).lexically_normal(); !p.empty(); p = p.parent_path()) {
+        if (fs::exists(p, ec)) {
+            if (!fs::is_directory(p, ec))
+                throw IoError(what + " '" + dir + "': the run directory " +
+                              (p == fs::path(dir).lexically_normal() ? std::string("is an existing file")
+                                                                     : "would be inside '" + p.string() + "', a file") +
+                              ", not a directory; give a directory (it is created if missing)");
+            return;
+        }
+        if (p == p.parent_path()) return;
+    }
+}
+
+void check_run_directory(const ExperimentConfig& ex, const std::string& output)
+{
+    check_run_directory(resolve_run_dir(ex, output),
+                        output.empty() ? ex.source + ": key 'output_dir'" : std::string("-o"));
+}
 
 void print_unit_plan(const ExperimentConfig& ex, const ExperimentPlan& plan, bool list_units)
 {
@@ -41,6 +66,7 @@ void register_plan(CLI::App& app)
     cmd->add_option("--manifest", a->manifest, "Manifest file (default: <run directory>/manifest.jsonl)");
     cmd->callback([a] {
         const ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
+        check_run_directory(ex, a->output);
         const ExperimentPlan plan = plan_experiment(ex, resolve_run_dir(ex, a->output));
         const std::string manifest = a->manifest.empty() ? plan.run_dir + "/manifest.jsonl" : a->manifest;
         write_text_atomically(manifest, manifest_jsonl(ex, plan));

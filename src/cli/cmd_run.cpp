@@ -44,25 +44,6 @@ void print_plan(const ExperimentConfig& ex, const std::string& run_dir, const st
     std::printf("the configuration is valid; nothing was run\n");
 }
 
-/// IoError naming `what` (-o, or the suite's output_dir) if the run directory `dir` cannot
-/// be one: it, or the nearest existing folder above it, is something other than a folder.
-void check_run_directory(const std::string& dir, const std::string& what)
-{
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    for (fs::path p = fs::path(dir).lexically_normal(); !p.empty(); p = p.parent_path()) {
-        if (fs::exists(p, ec)) {
-            if (!fs::is_directory(p, ec))
-                throw IoError(what + " '" + dir + "': the run directory " +
-                              (p == fs::path(dir).lexically_normal() ? std::string("is an existing file")
-                                                                     : "would be inside '" + p.string() + "', a file") +
-                              ", not a directory; give a directory (it is created if missing)");
-            return;
-        }
-        if (p == p.parent_path()) return;
-    }
-}
-
 } // namespace
 
 void register_run(CLI::App& app)
@@ -100,8 +81,7 @@ void register_run(CLI::App& app)
     cmd->callback([a] {
         ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
         if (!a->scenes.empty() || !a->integrators.empty()) ex = select_subset(ex, a->scenes, a->integrators);
-        check_run_directory(resolve_run_dir(ex, a->output),
-                            a->output.empty() ? ex.source + ": key 'output_dir'" : std::string("-o"));
+        check_run_directory(ex, a->output);
         if (a->check) {
             print_plan(ex, a->output.empty() ? ex.output_dir : a->output, a->deviations_dir);
             return;

@@ -60,6 +60,7 @@ void register_submit(CLI::App& app)
     cmd->add_flag("--dry-run", a->dry_run, "Print the sbatch scripts and commands; write and submit nothing");
     cmd->callback([a] {
         const ExperimentConfig ex = load_experiment(a->experiment, builtin_methods());
+        check_run_directory(ex, a->output);  // before the dry run prints scripts for it
         const ExperimentPlan plan = plan_experiment(ex, resolve_run_dir(ex, a->output));
         a->slurm.latentbench = fs::read_symlink("/proc/self/exe").string();
         check_slurm_options(a->slurm, plan);

@@ -37,6 +37,14 @@ int exit_status();
 /// `plan` and `submit`: the sweep and the unit counts (and with list_units each unit).
 void print_unit_plan(const ExperimentConfig& ex, const ExperimentPlan& plan, bool list_units);
 
+/// `run`, `plan` and `submit`: IoError naming `what` (-o, or the suite's output_dir key) and
+/// `dir` if the run directory cannot be one: it, or the nearest existing folder above it, is
+/// something other than a folder. Called before anything is printed or written.
+void check_run_directory(const std::string& dir, const std::string& what);
+/// check_run_directory for a suite's resolved run directory: `output` if given (-o), else
+/// the suite's output_dir (named as its key in the suite file).
+void check_run_directory(const ExperimentConfig& ex, const std::string& output);
+
 /// The --hidden option of train-ae: "256,256,256"; ConfigError naming
 /// the option if malformed or empty.
 std::vector<Index> parse_hidden_option(const std::string& text);

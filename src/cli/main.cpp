@@ -15,6 +15,7 @@
 #include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/parallel.hpp"
+#include "core/stop_signal.hpp"
 
 namespace {
 // Thread environment: OpenMP threads that spin-wait while OpenBLAS's own threads
@@ -42,6 +43,7 @@ int main(int argc, char** argv)
     ensure_thread_environment(argv);
     lb::keep_freed_memory();
     lb::set_command_line(argc, argv);
+    lb::install_stop_handlers();  // SIGTERM/SIGINT: training checkpoints its epoch, then stops
     CLI::App app{"latentbench: latent-space integrators for deformable simulation, benchmarked"};
     app.require_subcommand(1);
     bool quiet = false, verbose = false;
@@ -80,6 +82,11 @@ int main(int argc, char** argv)
         // (exit 2 is kept for internal errors).
         std::fprintf(stderr, "latentbench: error: %s (see latentbench --help)\n", e.what());
         return 1;
+    } catch (const lb::Stopped& e) {
+        // Stopped at a safe point: say where, then end as the signal would have.
+        std::fprintf(stderr, "latentbench: %s\n", e.what());
+        std::fflush(stderr);
+        lb::terminate_by_signal(e.signal());
     } catch (const lb::Error& e) {
         std::fprintf(stderr, "latentbench: error: %s\n", e.what());
         return 1;

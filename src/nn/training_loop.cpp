@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/limits.hpp"
 #include "core/log.hpp"
+#include "core/stop_signal.hpp"
 #include "core/timer.hpp"
 #include "nn/adam.hpp"
 
@@ -320,6 +321,9 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
     };
     auto early_stop = [&] { return validation && o.patience > 0 && c.epochs_since_improvement >= o.patience; };
     Progress progress(o.label + " epoch", o.epochs, o.progress ? 2.0 : 1e30, c.epoch);
+    // SIGTERM or SIGINT (pre-emption, scancel, Ctrl-C) during training: finish the epoch,
+    // checkpoint it and throw Stopped (core/stop_signal.hpp).
+    const StopPoint stop_point;
     while (c.epoch < o.epochs && !early_stop()) {
         try {
             c.last_loss = runner.run(c.epoch);
@@ -338,6 +342,16 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
         if (o.interrupt && o.interrupt(c.epoch)) {
             summary.interrupted = true;
             break;
+        }
+        if (const int signal = take_stop_signal()) {
+            if (last_saved != c.epoch) checkpoint();
+            const std::string message =
+                o.label + ": stopped by " + signal_name(signal) + " after epoch " + std::to_string(c.epoch) + " of " +
+                std::to_string(o.epochs) +
+                (path.empty() ? " (no checkpoint file: a new run starts again from epoch 0)"
+                              : "; checkpoint '" + path + "' written: the next run resumes from it");
+            log_warn("%s", message.c_str());
+            throw Stopped(signal, message);
         }
         if (o.max_seconds > 0.0 && seconds() > o.max_seconds) {
             summary.time_limited = c.epoch < o.epochs;

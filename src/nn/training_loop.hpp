@@ -23,6 +23,10 @@
 // otherwise it is set aside as `<path>.stale.<n>` with a log line giving the reason and
 // the name. A file that is not a checkpoint of this trainer (a dataset, an autoencoder,
 // the checkpoint of another trainer) is refused with a ConfigError and left in place.
+//
+// SIGTERM or SIGINT during training (core/stop_signal.hpp; the CLI installs the handlers)
+// stops the loop after the current epoch: it writes the checkpoint and throws Stopped, so
+// a pre-empted or interrupted run loses no finished epoch.
 #include <cstdint>
 #include <functional>
 #include <string>

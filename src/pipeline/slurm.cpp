@@ -84,8 +84,11 @@ std::vector<SlurmJob> slurm_jobs(const ExperimentConfig& ex, const ExperimentPla
         s << "#SBATCH --array=0-" << ids.size() - 1;
         if (o.max_parallel > 0) s << "%" << o.max_parallel;
         s << "\n";
-        // A pre-empted task is requeued; the unit then resumes from its checkpoints.
+        // A pre-empted task is requeued; the unit then resumes from its checkpoints (on
+        // SIGTERM training checkpoints its epoch first). Appending keeps the output of every
+        // run of the task: the stop, then the resume.
         s << "#SBATCH --requeue\n";
+        s << "#SBATCH --open-mode=append\n";
         s << "# latentbench submit: level " << level << " of suite '" << ex.name << "', " << ids.size()
           << " work units. Array index i runs the unit with \"level\": " << level << ", \"array_index\": i in\n"
           << "# " << plan.run_dir << "/manifest.jsonl; its log is " << plan.run_dir << "/units/<id>.log.\n";

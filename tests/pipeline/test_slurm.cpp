@@ -56,6 +56,9 @@ TEST(Slurm, OneArrayPerLevelChainedAndAMergeJob)
     EXPECT_NE(jobs[1].script.find("#SBATCH --partition=short\n"), std::string::npos);
     EXPECT_NE(jobs[1].script.find("#SBATCH --time=0:30:00\n"), std::string::npos);
     EXPECT_NE(jobs[1].script.find("--unit \"${units[$SLURM_ARRAY_TASK_ID]}\""), std::string::npos);
+    // Pre-empted tasks are requeued, and a requeued task's output is appended to, not replaced.
+    EXPECT_NE(jobs[1].script.find("#SBATCH --requeue\n"), std::string::npos);
+    EXPECT_NE(jobs[1].script.find("#SBATCH --open-mode=append\n"), std::string::npos);
     // The array order is the manifest's array_index order.
     size_t last = 0;
     for (const Unit& u : plan.units) {
