@@ -31,7 +31,7 @@ def test_potential_gradient_matches_finite_differences(setup):
     for kwargs in ({}, {"bc_targets": targets, "penalty_weight": 1e4}):
         f = lambda y: physics.potential(y, x_prev, x_prev2, **kwargs)
         e, g = physics.potential_and_gradient(x, x_prev, x_prev2, **kwargs)
-        assert e == f(x)
+        assert e == pytest.approx(f(x), rel=1e-12)  # one pass over the elements or two
         assert g.shape == (physics.num_dofs,)
         for _ in range(5):
             v = rng.standard_normal(physics.num_dofs)
