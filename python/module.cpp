@@ -108,13 +108,15 @@ void read_datasets(const h5::File& f, const std::string& group, py::dict& arrays
             continue;
         }
         try {
-            std::vector<hsize_t> dims;
-            std::vector<double> data = f.read_array(path, dims);
-            std::vector<py::ssize_t> shape(dims.begin(), dims.end());
-            arrays[py::str(path)] = py::array_t<double>(shape, data.data());
+            arrays[py::str(path)] = f.read_string(path);
+            continue;
         } catch (const IoError&) {
-            arrays[py::str(path)] = f.read_string(path);  // neither a number nor a string: IoError
+            // not a string: a numeric array, or read_array's IoError says what is wrong with it
         }
+        std::vector<hsize_t> dims;
+        std::vector<double> data = f.read_array(path, dims);
+        std::vector<py::ssize_t> shape(dims.begin(), dims.end());
+        arrays[py::str(path)] = py::array_t<double>(shape, data.data());
     }
 }
 

@@ -94,3 +94,14 @@ def test_wrong_shapes_are_refused(setup):
         physics.potential(x, x, x, penalty_weight=1.0)
     with pytest.raises(lb.Error, match="z: expected"):
         ae.decode(np.zeros(ae.latent_dim + 1), seq.bc_positions[3])
+
+
+def test_physics_from_the_scene_file_equals_the_datasets(setup):
+    data, physics, ae, seq = setup
+    from conftest import CLOTH
+    scene = lb.Physics.from_scene(str(CLOTH), "small")
+    assert scene.num_dofs == physics.num_dofs and scene.bc_indices == physics.bc_indices
+    x, x1, x2 = seq.positions[6], seq.positions[5], seq.positions[4]
+    assert scene.potential(x, x1, x2) == physics.potential(x, x1, x2)
+    with pytest.raises(lb.Error, match="nope"):
+        lb.Physics.from_scene(str(CLOTH), "nope")
