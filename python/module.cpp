@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli/app.hpp"
+#include "core/build_info.hpp"
 #include "core/error.hpp"
 #include "eval/metrics.hpp"
 #include "eval/rollout.hpp"
@@ -210,6 +211,10 @@ PYBIND11_MODULE(_latentbench, m)
     m.def(
         "run_cli",
         [](const std::vector<std::string>& args) {
+            // The provenance of what the verb writes names the command it ran, from Python.
+            std::vector<const char*> argv{"python:latentbench"};
+            for (const std::string& a : args) argv.push_back(a.c_str());
+            set_command_line(int(argv.size()), argv.data());
             cli::CliOutcome outcome;
             {
                 py::gil_scoped_release release;

@@ -4,7 +4,7 @@
 usage: compare_tables.py DIR_A DIR_B
 
 Every CSV file must exist in both with the same header and rows, cell for cell, except
-the timing columns (headers containing "(ms)"; in the tidy observations_*.csv the fields
+the timing columns (headers containing "(ms)"; in the tidy rollouts_*.csv the fields
 ending in "_ms" and timing_threads, the thread count the rollout was timed with) and the '#'
 comment lines (caption, notes, provenance with the date). Exits 0 if equal, 1 with every difference otherwise.
 """
@@ -22,7 +22,8 @@ def read_table(path):
 
 
 def is_timing(column):
-    return "(ms)" in column or column.endswith("_ms") or column == "timing_threads"
+    return ("(ms)" in column or column.endswith("_ms") or "_ms_" in column or column == "timing_threads"
+            or column.endswith("_seconds"))
 
 
 def compare(dir_a, dir_b):

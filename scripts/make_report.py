@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Publish experiment results and assemble the paper report's tables.
 
-  make_report.py publish RUN_DIR NAME   copy RUN_DIR/tables/*, RUN_DIR/figures/**/*.png and RUN_DIR/videos/*.mp4 into
-                                        results/NAME/ (the committed reference results)
+  make_report.py publish RUN_DIR NAME   copy RUN_DIR/tables/*, RUN_DIR/figures/**/*.png, RUN_DIR/videos/*.mp4,
+                                        experiment.toml and provenance.json into results/NAME/ (the committed
+                                        reference results; absolute paths under the repository made relative)
   make_report.py tables                 write paper/tables.md: every results/*/tables/*.md, Tables 1
                                         and 2 first, then method comparisons, then ablations
 
@@ -46,9 +47,22 @@ def publish(run_dir, name):
                 os.makedirs(os.path.join(out, "videos"), exist_ok=True)
                 shutil.copy2(os.path.join(videos, f), os.path.join(out, "videos", f))
                 video_count += 1
-    for extra in ("experiment.toml",):
+    for extra in ("experiment.toml", "provenance.json"):
         if os.path.exists(os.path.join(run_dir, extra)):
             shutil.copy2(os.path.join(run_dir, extra), out)
+    if not os.path.exists(os.path.join(out, "provenance.json")):
+        print(f"warning: {run_dir} has no provenance.json (a run made before 2026-12-05): "
+              f"`scripts/provenance.py retrofit {name}` after committing", file=sys.stderr)
+    # No absolute path of this machine in a published folder (the command may name files
+    # by absolute path): make them relative to the repository.
+    for path in (os.path.join(out, "provenance.json"), os.path.join(out, "experiment.toml")):
+        if os.path.exists(path):
+            with open(path) as fh:
+                text = fh.read()
+            cleaned = text.replace(ROOT + os.sep, "")
+            if cleaned != text:
+                with open(path, "w") as fh:
+                    fh.write(cleaned)
     print(f"published {run_dir} -> {out} ({len(os.listdir(os.path.join(out, 'tables')))} table files, {count} figures, {video_count} videos)")
 
 

@@ -6,6 +6,7 @@
 
 #include "cli/app.hpp"
 #include "core/allocator.hpp"
+#include "core/build_info.hpp"
 
 namespace {
 // Thread environment: OpenMP threads that spin-wait while OpenBLAS's own threads
@@ -27,6 +28,7 @@ int main(int argc, char** argv)
 {
     ensure_thread_environment(argv);
     lb::keep_freed_memory();
+    lb::set_command_line(argc, argv);
     // The subcommands, the global options and the errors: cli/app.cpp (shared with Python).
     const lb::cli::CliOutcome outcome = lb::cli::run_command_line("", argc, argv);
     if (!outcome.error.empty()) std::fprintf(stderr, "%s\n", outcome.error.c_str());

@@ -323,13 +323,71 @@ std::vector<TableCell> summary_table_cells_over_seeds(const std::vector<RolloutS
         }
         const int digits = m.table.cell ? 3 : m.table.digits;
         TableCell c = statistics_cell(values, digits);
+        // An aggregate over fewer runs than the row holds says how many it holds.
+        const std::string held = values.size() < n - empty
+                                     ? std::to_string(values.size()) + " of " + std::to_string(n - empty) + " seeds"
+                                     : "";
         if (m.table.error && cut > 0)
-            c.text += " (" + std::to_string(cut) + "/" + std::to_string(n - empty) + " diverged, earliest @" +
-                      std::to_string(earliest_cut) + ")";
+            c.text += " (" + (held.empty() ? "" : held + "; ") + std::to_string(cut) + "/" + std::to_string(n - empty) +
+                      " diverged, earliest @" + std::to_string(earliest_cut) + ")";
+        else if (!held.empty())
+            c.text += " (" + held + ")";
         if (m.table.cell == stable_cell && diverged > 0)
             c.text += " (" + std::to_string(diverged) + "/" + std::to_string(n) + " diverged, earliest @" +
                       std::to_string(earliest) + ")";
         cells.push_back(std::move(c));
+    }
+    return cells;
+}
+
+std::vector<std::string> summary_csv_columns()
+{
+    std::vector<std::string> columns{"n_seeds", "n_diverged", "diverged_at", "window_diverged"};
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (!m.table.shown || m.scope == SummaryScope::Test) continue;
+        const std::string base = std::string(m.field) + (m.table.cell == percent_cell ? "_percent" : "");
+        for (const char* stat : {"_median", "_min", "_max", "_n"}) columns.push_back(base + stat);
+    }
+    return columns;
+}
+
+std::vector<TableCell> summary_csv_cells(const std::vector<RolloutSummary>& runs, SummaryScope window)
+{
+    const auto count = [](size_t k) { return TableCell(std::to_string(k), double(k)); };
+    const auto value = [](double v) {
+        return std::isfinite(v) ? TableCell(TableCell::significant(v, 6).text, v) : TableCell::missing("nan");
+    };
+    size_t diverged = 0, window_diverged = 0;
+    int earliest = std::numeric_limits<int>::max();
+    for (const RolloutSummary& s : runs) {
+        if (s.stable_horizon >= s.frames) continue;
+        ++diverged;
+        earliest = std::min(earliest, s.stable_horizon);
+        const SummaryWindow& w = window_of(s, window);
+        if (w.window_frames > 0 && w.evaluated_frames < w.window_frames) ++window_diverged;
+    }
+    std::vector<TableCell> cells{count(runs.size()), count(diverged),
+                                 diverged > 0 ? value(double(earliest)) : TableCell::missing("nan"), count(window_diverged)};
+    for (const SummaryMetric& m : summary_metrics()) {
+        if (!m.table.shown || (m.scope != SummaryScope::Rollout && m.scope != window)) continue;
+        // The values the Markdown cell aggregates: an empty window has none, an error none
+        // from a run that blew up before the window began.
+        std::vector<double> values;
+        for (const RolloutSummary& s : runs) {
+            const SummaryWindow& w = window_of(s, window);
+            if (m.scope != SummaryScope::Rollout && w.window_frames == 0) continue;
+            if (m.table.error && w.evaluated_frames == 0) continue;
+            const double v = m.get(s);
+            if (std::isfinite(v)) values.push_back(m.table.cell == percent_cell ? 100.0 * v : v);
+        }
+        std::sort(values.begin(), values.end());
+        const size_t n = values.size();
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        const double median = n == 0 ? nan : n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+        cells.push_back(value(median));
+        cells.push_back(value(n ? values.front() : nan));
+        cells.push_back(value(n ? values.back() : nan));
+        cells.push_back(count(n));
     }
     return cells;
 }

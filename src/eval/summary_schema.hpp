@@ -164,6 +164,17 @@ std::vector<TableCell> summary_table_cells(const RolloutSummary& s, SummaryScope
 /// aggregated frames. Horizons count "never" as the frame count.
 std::vector<TableCell> summary_table_cells_over_seeds(const std::vector<RolloutSummary>& per_seed, SummaryScope window);
 
+/// The columns of a comparison table's CSV (the machine-readable twin of the Markdown
+/// cells): per row `n_seeds` (runs the row aggregates: seeds, or 1), `n_diverged` (runs
+/// that blew up), `diverged_at` (the earliest blow-up, nan if none), `window_diverged` (runs
+/// whose blow-up cuts or precedes this window); per shown metric `<field>_median`, `_min`,
+/// `_max` over the runs with a value and `_n`, how many have one (an error counts no run
+/// that blew up before the window; `frac_*` metrics are in percent, named `<field>_percent_*`).
+std::vector<std::string> summary_csv_columns();
+/// The cells of summary_csv_columns() for one row: `runs` holds one summary per seed (each
+/// over its sequences), or the one run of an unseeded method.
+std::vector<TableCell> summary_csv_cells(const std::vector<RolloutSummary>& runs, SummaryScope window);
+
 /// How summary_table_cells_over_seeds combines n seeds, for captions.
 std::string seed_statistics_text(size_t n);
 

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/build_info.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "io/atomic_file.hpp"
@@ -97,6 +98,8 @@ void check_shape(const Table& table)
     }
 }
 
+} // namespace
+
 std::string utc_now()
 {
     const std::time_t now = std::time(nullptr);
@@ -106,6 +109,8 @@ std::string utc_now()
     std::strftime(buffer, sizeof(buffer), "%Y-%m-%d %H:%M UTC", &tm);
     return buffer;
 }
+
+namespace {
 
 std::string trim(const std::string& s)
 {
@@ -197,7 +202,7 @@ std::string machine_description()
 std::string provenance_note(const std::string& threads)
 {
     return "machine: " + machine_description() + "; threads: " + (threads.empty() ? std::to_string(num_threads()) : threads) +
-           "; build: " + std::string(LB_BUILD_TYPE) + "; date: " + utc_now();
+           "; build: " + std::string(LB_BUILD_TYPE) + "; commit: " + build_commit_short() + "; date: " + utc_now();
 }
 
 // ---- Markdown -----------------------------------------------------------------

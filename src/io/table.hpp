@@ -56,7 +56,9 @@ struct Table {
 /// "AMD EPYC 7B13 (2 logical cores, x86_64)": CPU model from /proc/cpuinfo
 /// ("model name"), logical core count and machine architecture.
 std::string machine_description();
-/// "machine: ...; threads: N; build: Release; date: 2025-01-31 14:05 UTC"; `threads`, if
+/// The current time, "2025-01-31 14:05 UTC".
+std::string utc_now();
+/// "machine: ...; threads: N; build: Release; commit: 434ffe6a1b2c+dirty; date: 2025-01-31 14:05 UTC"; `threads`, if
 /// given, stands for N (this process's thread count).
 std::string provenance_note(const std::string& threads = "");
 

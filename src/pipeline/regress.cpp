@@ -89,7 +89,7 @@ std::string window_word(const std::string& text, const std::string& where)
     return w;
 }
 
-/// observations_<scene>.csv: group by row key, then by seed, aggregate over sequences.
+/// rollouts_<scene>.csv (observations_ in older runs): group by row key, then by seed, aggregate over sequences.
 std::vector<GateRow> rows_from_observations(const std::string& path)
 {
     const Table t = read_csv(path);
@@ -133,17 +133,23 @@ std::vector<GateRow> rows_from_observations(const std::string& path)
     return out;
 }
 
-/// methods_<scene>.csv (a folder without observations): one observation per table row,
-/// the metrics found by their column titles (the schema's); divergence unknown.
+/// methods_<scene>.csv (a folder without rollouts_/observations_ tables): one observation
+/// per table row. Today's CSV (the Markdown's machine-readable twin) gives each metric's
+/// median over the row's seeds (`<field>_median`) and the seed and divergence counts; an
+/// older one the metrics under their column titles (the schema's), divergence unknown.
 std::vector<GateRow> rows_from_methods_table(const std::string& path, const std::string& scene)
 {
     const Table t = read_csv(path);
     const size_t method = column_index(t, "method", path, true), window = column_index(t, "window", path, true);
     const size_t point = column_index(t, "sweep point", path, false);
+    const size_t n_seeds = column_index(t, "n_seeds", path, false), n_diverged = column_index(t, "n_diverged", path, false);
+    const bool twin = n_seeds != std::string::npos && n_diverged != std::string::npos;
     std::vector<std::pair<std::string, size_t>> fields;
     for (const auto& [field, higher] : gateable_metrics()) {
         (void)higher;
-        const size_t c = column_index(t, metric_by_field(field)->title, path, false);
+        const SummaryMetric* m = metric_by_field(field);
+        const std::string percent = m->title[0] == '%' ? "_percent" : "";
+        const size_t c = twin ? column_index(t, field + percent + "_median", path, false) : column_index(t, m->title, path, false);
         if (c != std::string::npos) fields.emplace_back(field, c);
     }
     std::vector<GateRow> out;
@@ -154,9 +160,13 @@ std::vector<GateRow> rows_from_methods_table(const std::string& path, const std:
         g.key = {scene, row[method].text, point == std::string::npos ? "" : row[point].text,
                  window_word(row[window].text, where)};
         g.source = path;
-        g.seeds = 1;
-        g.diverged = -1;  // the CSV holds the stable horizon, not the frame count
-        for (const auto& [field, c] : fields) g.values[field].push_back(cell_value(row[c]));
+        g.seeds = twin ? int(cell_value(row[n_seeds])) : 1;
+        g.diverged = twin ? int(cell_value(row[n_diverged])) : -1;  // an old CSV: the stable horizon, not the frame count
+        for (const auto& [field, c] : fields) {
+            // A percentage column holds percent; the gate compares the schema's fractions.
+            const double v = cell_value(row[c]);
+            g.values[field].push_back(twin && metric_by_field(field)->title[0] == '%' ? v / 100.0 : v);
+        }
         out.push_back(std::move(g));
     }
     return out;
@@ -340,11 +350,13 @@ std::vector<GateRow> load_gate_rows(const std::string& dir)
     for (const auto& e : fs::directory_iterator(tables)) {
         if (e.path().extension() != ".csv") continue;
         const std::string stem = e.path().stem().string();
-        if (stem.rfind("observations_", 0) == 0) observations[stem.substr(13)] = e.path().string();
+        // rollouts_<scene>.csv; observations_<scene>.csv is its name in runs before 2026-12-05.
+        if (stem.rfind("rollouts_", 0) == 0) observations[stem.substr(9)] = e.path().string();
+        else if (stem.rfind("observations_", 0) == 0) observations.emplace(stem.substr(13), e.path().string());
         else if (stem.rfind("methods_", 0) == 0) methods[stem.substr(8)] = e.path().string();
     }
     if (observations.empty() && methods.empty())
-        throw IoError(tables + ": no observations_*.csv nor methods_*.csv (has the run finished its tables stage?)");
+        throw IoError(tables + ": no rollouts_*.csv nor methods_*.csv (has the run finished its tables stage?)");
     std::vector<GateRow> rows;
     for (const auto& [scene, file] : observations) {
         for (GateRow& r : rows_from_observations(file)) rows.push_back(std::move(r));

@@ -15,7 +15,7 @@
 // regresses; the reverse improves. Divergence is its own check: a row regresses when
 // a larger share of its seeds blew up than in the baseline ("newly diverged").
 //
-// Input: per scene the tidy `observations_<scene>.csv` that `latentbench run` writes
+// Input: per scene the tidy `rollouts_<scene>.csv` that `latentbench run` writes
 // (one row per method, sweep point, seed, sequence and window); a folder written
 // before those existed is read through its `methods_<scene>.csv` instead, one
 // observation per row (the table's value: with seeds the median, so the range
@@ -77,7 +77,7 @@ struct GateRow {
 };
 
 /// Every row of a run or results folder: DIR/tables/ if it exists, else DIR itself.
-/// IoError naming the folder if it holds no observations_*.csv nor methods_*.csv,
+/// IoError naming the folder if it holds no rollouts_*.csv nor methods_*.csv,
 /// and naming the file (and line) if one is malformed.
 std::vector<GateRow> load_gate_rows(const std::string& dir);
 

@@ -1,3 +1,4 @@
+#include "lb_paths.hpp"
 #include "pipeline/report.hpp"
 
 #include <algorithm>
@@ -5,9 +6,15 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <limits>
 
+#include "core/build_info.hpp"
+#include "core/hash.hpp"
+#include "core/parallel.hpp"
 #include "eval/summary_schema.hpp"
+#include "io/atomic_file.hpp"
 #include "io/table.hpp"
 #include "paper/paper_numbers.hpp"
 #include "pipeline/deviations.hpp"
@@ -15,6 +22,8 @@
 #include "scene/scene.hpp"
 
 namespace lb {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -35,6 +44,31 @@ std::string aggregation_text(const SceneResult& r)
            " sequences: horizons are the worst case (the earliest over the sequences), "
            "percentages, errors, KE ratios and times the mean over the sequences (each sequence's errors "
            "aggregated before its own horizon), the boundary violation the largest.";
+}
+
+/// A method's training budget in numbers: mean epochs run and seconds over its fits, the
+/// largest epoch budget (0: unknown); `recorded` fits (0: nothing trained).
+struct BudgetNumbers {
+    int recorded = 0;
+    double epochs = 0.0, seconds = 0.0;
+    long long budget = 0;
+};
+
+BudgetNumbers budget_numbers(const std::vector<TrainingBudget>& budgets)
+{
+    BudgetNumbers n;
+    for (const TrainingBudget& b : budgets) {
+        if (!b.recorded) continue;
+        ++n.recorded;
+        n.epochs += double(b.epochs_run);
+        n.seconds += b.seconds;
+        n.budget = std::max(n.budget, b.epochs_budget);
+    }
+    if (n.recorded > 0) {
+        n.epochs /= n.recorded;
+        n.seconds /= n.recorded;
+    }
+    return n;
 }
 
 /// The training budget of a method and how its training ended, e.g.
@@ -96,7 +130,8 @@ std::string timing_threads_text(const std::vector<const MethodResult*>& methods)
     return text;
 }
 
-Table comparison_table(const SceneResult& r, const std::vector<std::string>& only, const std::string& title)
+Table comparison_table(const SceneResult& r, const std::vector<std::string>& only, const std::string& title,
+                       Table* csv = nullptr)
 {
     Table t;
     t.title = title;
@@ -127,25 +162,56 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
     if (swept)
         t.caption += " Rows are labelled with their [sweep] point; 'all points' rows do not depend on the swept keys "
                      "and ran once.";
-    t.columns = {"method", "configuration", "training", "window"};
+    t.caption += " 'seeds' counts the runs a row aggregates (1 for a method without a seed).";
+    t.columns = {"method", "configuration", "training", "window", "seeds"};
     if (swept) t.columns.insert(t.columns.begin() + 1, "sweep point");
     for (const auto& title : summary_table_columns()) t.columns.push_back(title);
+    if (csv) {
+        csv->title = t.title;
+        csv->caption = "The machine-readable twin of methods_" + r.label +
+                       ".md (read with pandas.read_csv(path, comment='#')): one row per method and window, with "
+                       "n_seeds (runs the row aggregates), n_diverged (runs that blew up: non-finite state or RMSE > 0.5), "
+                       "diverged_at (the earliest blow-up frame, nan if none) and window_diverged (runs whose blow-up cuts "
+                       "or precedes the window); per metric the median, min and max over the runs that have a value, and "
+                       "_n, how many do (an error is aggregated before the blow-up, so a run that blew up before the window "
+                       "has none). training_epochs and training_seconds are means over the row's fits, training_epoch_budget "
+                       "the epoch budget (nan: nothing trained). Per-run values: rollouts_" + r.label + ".csv.";
+        csv->columns = {"method", "configuration", "training_epochs", "training_epoch_budget", "training_seconds", "window"};
+        if (swept) csv->columns.insert(csv->columns.begin() + 1, "sweep point");
+        for (const auto& c : summary_csv_columns()) csv->columns.push_back(c);
+    }
     std::vector<const MethodResult*> shown;
     for (const auto& m : r.methods) {
         if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
         shown.push_back(&m);
         const RolloutSummary s = aggregate(m.summaries);
+        const std::vector<RolloutSummary> runs = m.per_seed.size() > 1 ? m.per_seed : std::vector<RolloutSummary>{s};
+        const TableCell budget = budget_cell(m.budgets);
         for (const SummaryScope window : {SummaryScope::Train, SummaryScope::Test}) {
-            std::vector<TableCell> cells{m.name, m.summary, budget_cell(m.budgets), window_label(s, window)};
+            std::vector<TableCell> cells{m.name, m.summary, budget, window_label(s, window),
+                                         TableCell(std::to_string(runs.size()), double(runs.size()))};
             if (swept) cells.insert(cells.begin() + 1, TableCell(m.point.empty() ? "all points" : m.point));
             for (auto& c : m.per_seed.size() > 1 ? summary_table_cells_over_seeds(m.per_seed, window)
                                                  : summary_table_cells(s, window))
                 cells.push_back(std::move(c));
             t.add_row(std::move(cells));
+            if (csv) {
+                const BudgetNumbers b = budget_numbers(m.budgets);
+                const auto number_or_nan = [&](double v, bool known) {
+                    return known ? TableCell(TableCell::significant(v, 6).text, v) : TableCell::missing("nan");
+                };
+                std::vector<TableCell> row{m.name, m.summary, number_or_nan(b.epochs, b.recorded > 0),
+                                           number_or_nan(double(b.budget), b.recorded > 0 && b.budget > 0),
+                                           number_or_nan(b.seconds, b.recorded > 0), window_label(s, window)};
+                if (swept) row.insert(row.begin() + 1, TableCell(m.point.empty() ? "all points" : m.point));
+                for (auto& c : summary_csv_cells(runs, window)) row.push_back(std::move(c));
+                csv->add_row(std::move(row));
+            }
         }
     }
     t.add_note("training horizon: " + std::to_string(r.train_frames) + " frames per sequence");
     t.add_provenance(timing_threads_text(shown));
+    if (csv) csv->notes = t.notes;
     return t;
 }
 
@@ -240,7 +306,7 @@ void paper_tables(const std::vector<SceneResult>& scenes, Table& t1, Table& t2)
 Table observations_table(const SceneResult& r)
 {
     Table t;
-    t.title = "Observations on " + r.label;
+    t.title = "Rollouts on " + r.label;
     t.caption = "One row per method, sweep point, seed, sequence and window (the tidy data behind methods_" + r.label +
                 "): every summary metric by its field name (README, Metrics), window metrics of the row's window; "
                 "diverged = the rollout blew up (stable_horizon < frames), diverged_at its stable horizon. seed is "
@@ -296,7 +362,17 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
 {
     std::filesystem::create_directories(dir);
     std::vector<std::string> written;
-    auto emit = [&](const Table& t, const std::string& stem) { written.push_back(write_table_files(t, dir + "/" + stem).front()); };
+    const std::string suite_note = suite_provenance_note(ex, scenes);
+    // Markdown and LaTeX show `t`; the CSV is `csv` where a table has a machine-readable twin.
+    auto emit = [&](Table t, const std::string& stem, Table* csv = nullptr) {
+        t.add_note(suite_note);
+        const std::string path = dir + "/" + stem;
+        write_markdown(t, path + ".md");
+        if (csv) csv->add_note(suite_note);
+        write_csv(csv ? *csv : t, path + ".csv");
+        write_latex(t, path + ".tex");
+        written.push_back(path + ".md");
+    };
     for (const SceneResult& r : scenes) {
         // The deviations from the paper's recipe, from the resolved settings (issue 39).
         for (const SceneSpec& spec : ex.scenes) {
@@ -304,14 +380,17 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
             const Scene scene = load_scene(spec.scene_path, {spec.variant});
             emit(deviations_table(ex, spec, scene.name, resolved_autoencoder(spec, scene)), "deviations_" + r.label);
         }
-        Table methods = comparison_table(r, {}, "Methods on " + r.label);
+        Table methods_csv;
+        Table methods = comparison_table(r, {}, "Methods on " + r.label, &methods_csv);
         const Table embeddings = embedding_table(r);
         if (!embeddings.rows.empty()) {
             methods.add_note("embedding metrics (M_rms, M_STED, M_phys) of the shared and the methods' own "
                              "autoencoders: embedding_" + r.label);
         }
-        emit(methods, "methods_" + r.label);
-        write_csv(observations_table(r), dir + "/observations_" + r.label + ".csv");
+        emit(methods, "methods_" + r.label, &methods_csv);
+        Table rollouts = observations_table(r);
+        rollouts.add_note(suite_note);
+        write_csv(rollouts, dir + "/rollouts_" + r.label + ".csv");
         if (!embeddings.rows.empty()) emit(embeddings, "embedding_" + r.label);
         for (const AblationSpec& ab : ex.ablations) {
             // Only on scenes that ran every method of the ablation (a scene may run a subset).
@@ -319,8 +398,11 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
                 return std::any_of(r.methods.begin(), r.methods.end(),
                                    [&](const MethodResult& m) { return m.name == name; });
             });
-            if (complete)
-                emit(comparison_table(r, ab.methods, ab.title + " (" + r.label + ")"), "ablation_" + ab.name + "_" + r.label);
+            if (complete) {
+                Table ablation_csv;
+                emit(comparison_table(r, ab.methods, ab.title + " (" + r.label + ")", &ablation_csv),
+                     "ablation_" + ab.name + "_" + r.label, &ablation_csv);
+            }
         }
     }
     if (ex.paper_tables) {
@@ -330,6 +412,108 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
         if (!t2.rows.empty()) emit(t2, "table2_jvp");
     }
     return written;
+}
+
+std::string suite_file_hash(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return "";
+    std::ostringstream text;
+    text << in.rdbuf();
+    return "fnv1a64:" + fnv1a64_hex(text.str());
+}
+
+namespace {
+
+/// Every seed a suite's rows ran with ("0, 1, 2"), or "none (each method's own)".
+std::string seeds_text(const ExperimentConfig& ex)
+{
+    std::string text;
+    for (const std::uint64_t s : ex.seeds) text += (text.empty() ? "" : ", ") + std::to_string(s);
+    return text.empty() ? "none (each method's own)" : text;
+}
+
+/// "ours 3, supervised_l2 1": the fit_version of each row's method (learned ones; others 1).
+std::vector<std::pair<std::string, int>> fit_versions(const std::vector<SceneResult>& scenes)
+{
+    std::vector<std::pair<std::string, int>> out;
+    for (const SceneResult& r : scenes) {
+        for (const MethodResult& m : r.methods) {
+            const bool known = std::any_of(out.begin(), out.end(), [&](const auto& p) { return p.first == m.name; });
+            if (!known) out.emplace_back(m.name, m.fit_version);
+        }
+    }
+    return out;
+}
+
+std::string json_string(const std::string& text)
+{
+    std::string out = "\"";
+    for (const char c : text) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += c;
+        } else if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            out += buf;
+        } else {
+            out += c;
+        }
+    }
+    return out + "\"";
+}
+
+/// The suite file as provenance names it: relative to the working directory when it is
+/// inside it (no absolute path of this machine in a published folder), else its file name.
+std::string suite_file_name(const std::string& source)
+{
+    std::error_code ec;
+    const fs::path absolute = fs::absolute(source, ec);
+    const fs::path relative = fs::relative(absolute, fs::current_path(ec), ec);
+    if (!ec && !relative.empty() && *relative.begin() != "..") return relative.generic_string();
+    return fs::path(source).filename().string();
+}
+
+} // namespace
+
+std::string suite_provenance_note(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes)
+{
+    std::string versions;
+    for (const auto& [name, version] : fit_versions(scenes))
+        versions += (versions.empty() ? "" : ", ") + name + " " + std::to_string(version);
+    const std::string command = command_line_text();
+    return "suite: " + ex.name + " (" + suite_file_name(ex.source) + ", " + suite_file_hash(ex.source) +
+           "); seeds: " + seeds_text(ex) + "; fit versions: " + versions +
+           "; command: " + (command.empty() ? "(not recorded)" : command);
+}
+
+void write_provenance(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes, const std::string& run_dir)
+{
+    std::string versions;
+    for (const auto& [name, version] : fit_versions(scenes))
+        versions += std::string(versions.empty() ? "" : ", ") + json_string(name) + ": " + std::to_string(version);
+    std::string seeds;
+    for (const std::uint64_t s : ex.seeds) seeds += (seeds.empty() ? "" : ", ") + std::to_string(s);
+    std::string command;
+    for (const std::string& a : command_line()) command += (command.empty() ? "" : ", ") + json_string(a);
+    const std::string text =
+        "{\n"
+        "  \"format\": \"latentbench.provenance/1\",\n"
+        "  \"suite\": " + json_string(ex.name) + ",\n"
+        "  \"suite_file\": " + json_string(suite_file_name(ex.source)) + ",\n"
+        "  \"suite_hash\": " + json_string(suite_file_hash(ex.source)) + ",\n"
+        "  \"commit\": " + json_string(build_commit()) + ",\n"
+        "  \"dirty\": " + (build_dirty() ? "true" : "false") + ",\n"
+        "  \"build\": " + json_string(LB_BUILD_TYPE) + ",\n"
+        "  \"seeds\": [" + seeds + "],\n"
+        "  \"threads\": " + std::to_string(ex.threads > 0 ? ex.threads : num_threads()) + ",\n"
+        "  \"fit_versions\": {" + versions + "},\n"
+        "  \"command\": [" + command + "],\n"
+        "  \"machine\": " + json_string(machine_description()) + ",\n"
+        "  \"date\": " + json_string(utc_now()) + "\n"
+        "}\n";
+    write_text_atomically(run_dir + "/provenance.json", text);
 }
 
 } // namespace lb

@@ -28,6 +28,7 @@ struct MethodResult {
     std::string method;   ///< registered method name
     std::string summary;  ///< Method::summary()
     std::string layers;   ///< Method::layers()
+    int fit_version = 0;  ///< Method::fit_version() (provenance)
     bool paper_method = false;
     std::string rollout_file;
     std::string rollout_key;  ///< the rollout stage's cache key (covers every input of the rollout)
@@ -71,8 +72,22 @@ struct SceneResult {
 Table observations_table(const SceneResult& r);
 
 /// Write every table (Markdown, CSV, LaTeX) into `dir`, and per scene the tidy
-/// `observations_<label>.csv` (CSV only); returns the Markdown paths.
+/// `rollouts_<label>.csv` (CSV only); returns the Markdown paths. A comparison table's CSV is
+/// its machine-readable twin (summary_csv_columns: seed counts, divergence flags, median,
+/// min and max per metric), not a copy of the Markdown cells. Every table carries the
+/// suite's provenance note (suite_provenance_note).
 std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes,
                                       const std::string& dir);
+
+/// "suite: NAME (FILE, fnv1a64 HASH); seeds: 0, 1, 2; fit versions: ours 3, ...; command: ..."
+std::string suite_provenance_note(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes);
+
+/// `provenance.json` of a run directory: the commit (and dirty flag) of the binary, the
+/// suite file's name and content hash, the seeds, the thread count, every method's
+/// fit_version, the command, machine and date. Written atomically.
+void write_provenance(const ExperimentConfig& ex, const std::vector<SceneResult>& scenes, const std::string& run_dir);
+
+/// The content hash of a suite file as provenance records it: "fnv1a64:<16 hex>" of its bytes.
+std::string suite_file_hash(const std::string& path);
 
 } // namespace lb

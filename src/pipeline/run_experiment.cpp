@@ -386,6 +386,7 @@ private:
                 mr.method = method.method_name();
                 mr.summary = method.summary();
                 mr.layers = method.layers();
+                mr.fit_version = method.fit_version();
                 mr.paper_method = method.is_paper_method();
                 mr.rollout_file = u.outputs[0].file;
                 mr.rollout_key = u.outputs[0].key;
@@ -464,6 +465,7 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
     for (size_t s = 0; s < ex.scenes.size(); ++s) scenes.push_back(runner.scene_result(s));
 
     result.tables = write_tables(ex, scenes, result.run_dir + "/tables");
+    write_provenance(ex, scenes, result.run_dir);
     log_info("[tables] %zu tables in %s/tables", result.tables.size(), result.run_dir.c_str());
     if (ex.diagnose) {
         for (size_t s = 0; s < ex.scenes.size(); ++s) {

@@ -133,12 +133,12 @@ TEST(CliRegress, BadInputNamesTheFileAndExitsOne)
     const std::string empty = fresh_dir("cli_regress_empty");
     auto r = run_cli("regress " + empty + " --baseline " + base);
     EXPECT_EQ(r.exit_code, 1) << r.output;
-    EXPECT_NE(r.output.find("latentbench: error: " + empty + ": no observations_*.csv nor methods_*.csv"),
+    EXPECT_NE(r.output.find("latentbench: error: " + empty + ": no rollouts_*.csv nor methods_*.csv"),
               std::string::npos)
         << r.output;
 
     const std::string broken = write_run("broken", 0.01, 0);
-    const std::string table = broken + "/tables/observations_cloth_small.csv";
+    const std::string table = broken + "/tables/rollouts_cloth_small.csv";
     std::ofstream(table, std::ios::app) << "\"unterminated\n";
     r = run_cli("regress " + broken + " --baseline " + base);
     EXPECT_EQ(r.exit_code, 1) << r.output;

@@ -1,5 +1,5 @@
 // The regression gate (pipeline/regress.hpp) on tables written by the real table
-// writer (write_tables: methods_*.csv and the tidy observations_*.csv): an identical
+// writer (write_tables: methods_*.csv and the tidy rollouts_*.csv): an identical
 // run passes, a degraded method is caught and named, an improvement is not a failure,
 // missing and new rows are reported, the seed range is widened by the tolerance, the
 // JUnit XML holds one testcase per row, and bad input names the file.
@@ -121,7 +121,7 @@ std::ptrdiff_t occurrences(const std::string& text, const std::string& what)
 TEST(Regress, ObservationsTableIsOneRowPerSeedSequenceAndWindow)
 {
     const std::string dir = write_run("observations", baseline_methods());
-    const Table t = read_csv(dir + "/tables/observations_cantilever_small.csv");
+    const Table t = read_csv(dir + "/tables/rollouts_cantilever_small.csv");
     EXPECT_EQ(t.rows.size(), (3u + 3u + 1u) * 2u);  // seeds × windows, pca once per window
     for (const char* column : {"scene", "method", "sweep point", "seed", "sequence", "window", "stable_horizon",
                                "mean_rmse", "max_bc_violation", "diverged", "diverged_at"}) {
@@ -286,13 +286,14 @@ TEST(Regress, JunitHasOneTestcasePerRow)
 
 TEST(Regress, MethodsTablesStandInForObservations)
 {
-    // A results/ folder published before observations_*.csv existed: the methods tables.
+    // A results/ folder published before rollouts_*.csv existed: the methods tables.
     const std::string base = write_run("methods_base", baseline_methods());
-    fs::remove(base + "/tables/observations_cantilever_small.csv");
+    fs::remove(base + "/tables/rollouts_cantilever_small.csv");
     const GateReport same = gate(base, base);
     EXPECT_FALSE(same.failed());
     EXPECT_EQ(same.count(GateVerdict::Unchanged), 6);
-    EXPECT_EQ(metric_of(row_of(same, "ours", "test"), "diverged"), nullptr);  // unknown from a methods table
+    // Today's methods CSV is the Markdown's machine-readable twin: it counts diverged seeds.
+    EXPECT_NE(metric_of(row_of(same, "ours", "test"), "diverged"), nullptr);
     std::vector<MethodResult> now = baseline_methods();
     now[1] = method("supervised", {rollout(0.05, 20), rollout(0.05, 20), rollout(0.05, 20)});
     const GateReport worse = gate(base, write_run("methods_run", now));
@@ -314,7 +315,7 @@ TEST(Regress, BadInputNamesTheFile)
     EXPECT_THROW(load_gate_rows(empty + "/none"), IoError);
 
     const std::string dir = write_run("bad_csv", baseline_methods());
-    const std::string file = dir + "/tables/observations_cantilever_small.csv";
+    const std::string file = dir + "/tables/rollouts_cantilever_small.csv";
     std::ofstream(file, std::ios::app) << "cantilever_small,ours,only three\n";
     try {
         load_gate_rows(dir);

@@ -6,10 +6,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
+#include "core/build_info.hpp"
 #include "core/parallel.hpp"
+#include "io/table.hpp"
 #include "eval/metrics.hpp"
 #include "pipeline/report.hpp"
 
@@ -300,6 +303,86 @@ TEST(Report, SeedsGiveAnIntervalOrARangeAndTheBudgetIsStated)
     std::filesystem::remove_all(dir);
     write_tables(with_ablation, {scene_with({five})}, dir);
     EXPECT_FALSE(std::filesystem::exists(dir + "/ablation_supervision_cloth_small.md"));
+}
+
+/// The value of `column` in the first CSV row whose method and window start as given.
+double csv_value(const Table& t, const std::string& method, const std::string& window, const std::string& column)
+{
+    size_t m = t.columns.size(), w = m, c = m;
+    for (size_t k = 0; k < t.columns.size(); ++k) {
+        if (t.columns[k] == "method") m = k;
+        if (t.columns[k] == "window") w = k;
+        if (t.columns[k] == column) c = k;
+    }
+    if (c == t.columns.size()) ADD_FAILURE() << "no column " << column;
+    for (const auto& row : t.rows) {
+        if (c < row.size() && row[m].text == method && row[w].text.rfind(window, 0) == 0)
+            return row[c].value ? *row[c].value : std::numeric_limits<double>::infinity();
+    }
+    ADD_FAILURE() << "no row " << method << " / " << window;
+    return 0.0;
+}
+
+TEST(Report, CsvTwinCountsSeedsAndDivergenceWhereTheMarkdownSaysSo)
+{
+    // Three seeds, one of which blows up at frame 20, before the test window (frames >= 30);
+    // and a method without seeds that blows up at 20 too.
+    MethodResult three = method_result("ours", "latent_mlp", "self_supervised", true, {});
+    for (int k = 0; k < 3; ++k) {
+        three.seeds.push_back(std::uint64_t(k));
+        three.per_seed.push_back(rollout_summary(k == 1 ? 20 : 0));
+        three.summaries.push_back(three.per_seed.back());
+        three.summary_seeds.push_back(k);
+        three.sequences.push_back("test");
+    }
+    MethodResult single = method_result("sup", "latent_mlp", "supervised_l2", false, {rollout_summary(20)});
+    single.fit_version = 4;
+    ExperimentConfig ex;
+    ex.name = "csv_twin";
+    ex.paper_tables = false;
+    const std::string dir = std::string(LB_TEST_TMP_DIR) + "/report_csv_twin";
+    std::filesystem::remove_all(dir);
+    const std::string md = read_all(write_tables(ex, {scene_with({three, single})}, dir).at(0));
+    const std::vector<std::string> rows = body_rows(md);
+    ASSERT_EQ(rows.size(), 4u) << md;
+    // The Markdown: the test-window error over the two seeds that reached it, and says so.
+    EXPECT_EQ(cell_of(md, rows[1], "mean RMSE"), "0.01 [0.01, 0.01] (2 of 3 seeds; 1/3 diverged, earliest @20)");
+    EXPECT_EQ(cell_of(md, rows[1], "seeds"), "3");
+    EXPECT_EQ(cell_of(md, rows[3], "mean RMSE"), "diverged @20");
+
+    // The CSV, read as a script would: the counts and flags are there, not a bare number.
+    const Table csv = read_csv(dir + "/methods_cloth_small.csv");
+    EXPECT_EQ(csv_value(csv, "ours", "test", "n_seeds"), 3.0);
+    EXPECT_EQ(csv_value(csv, "ours", "test", "n_diverged"), 1.0);
+    EXPECT_EQ(csv_value(csv, "ours", "test", "diverged_at"), 20.0);
+    EXPECT_EQ(csv_value(csv, "ours", "test", "window_diverged"), 1.0);
+    EXPECT_EQ(csv_value(csv, "ours", "test", "mean_rmse_n"), 2.0);
+    EXPECT_DOUBLE_EQ(csv_value(csv, "ours", "test", "mean_rmse_median"), 0.01);
+    EXPECT_EQ(csv_value(csv, "ours", "test", "stable_horizon_min"), 20.0);
+    EXPECT_EQ(csv_value(csv, "ours", "test", "stable_horizon_max"), 60.0);
+    EXPECT_EQ(csv_value(csv, "sup", "test", "n_seeds"), 1.0);
+    EXPECT_EQ(csv_value(csv, "sup", "test", "n_diverged"), 1.0);
+    EXPECT_EQ(csv_value(csv, "sup", "train", "window_diverged"), 1.0);
+    EXPECT_TRUE(std::isnan(csv_value(csv, "sup", "test", "mean_rmse_median")));  // "diverged @20" in Markdown
+    EXPECT_EQ(csv_value(csv, "sup", "test", "mean_rmse_n"), 0.0);
+    EXPECT_EQ(csv_value(csv, "ours", "train", "window_diverged"), 1.0);  // cut inside the training window
+
+    // The tidy rollouts: one row per seed and window, the flag on the seed that blew up.
+    const Table tidy = read_csv(dir + "/rollouts_cloth_small.csv");
+    ASSERT_EQ(tidy.rows.size(), 8u);  // (3 seeds + 1 run) × 2 windows
+    int flagged = 0;
+    for (const auto& row : tidy.rows) flagged += row[tidy.columns.size() - 2].text == "1";
+    EXPECT_EQ(flagged, 4);  // seed 1 and `sup`, both windows
+
+    // Provenance: every table's notes name the commit, the suite and the fit versions.
+    EXPECT_NE(md.find(std::string("commit: ") + build_commit_short()), std::string::npos) << md;
+    EXPECT_NE(md.find("suite: csv_twin"), std::string::npos) << md;
+    EXPECT_NE(md.find("fit versions: ours 0, sup 4"), std::string::npos) << md;
+    EXPECT_NE(read_all(dir + "/methods_cloth_small.csv").find("# suite: csv_twin"), std::string::npos);
+    write_provenance(ex, {scene_with({three, single})}, dir);
+    const std::string json = read_all(dir + "/provenance.json");
+    EXPECT_NE(json.find(std::string("\"commit\": \"") + build_commit() + "\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"fit_versions\": {\"ours\": 0, \"sup\": 4}"), std::string::npos) << json;
 }
 
 } // namespace
