@@ -6,10 +6,20 @@
                                         reference results; absolute paths under the repository made relative)
   make_report.py tables                 write paper/tables.md: every results/*/tables/*.md, Tables 1
                                         and 2 first, then method comparisons, then ablations
+  make_report.py report [--check]       write paper/REPORT.md from paper/REPORT.src.md, every measured
+                                        number a reference to a table cell (markup below); --check:
+                                        write nothing, exit 1 if paper/REPORT.md differs
+  make_report.py performance [--check]  write paper/performance.md from results/bench/*.json (Google
+                                        Benchmark), one table per benchmark family
 
-Run with the Debian interpreter (/usr/bin/python3). paper/REPORT.md discusses these tables.
+--root DIR (before the subcommand) works on another checkout's results/ and paper/ (default: this one).
+Run with the Debian interpreter (/usr/bin/python3).
 """
+import json
+import math
 import os
+import re
+import shlex
 import shutil
 import sys
 
@@ -94,11 +104,482 @@ def tables():
     print(path)
 
 
+# ---------------------------------------------------------------------------------------------
+# The generated report: paper/REPORT.src.md -> paper/REPORT.md.
+#
+# Markup (everything else in the source is copied verbatim):
+#   {{cell SUITE/STEM row="ours|test" col="mean RMSE" part=value}}
+#       the cell of results/SUITE/tables/STEM.md (or results/SUITE/STEM.md) in the row whose
+#       text columns (the table's left-aligned ones: method, window, stage, example, ...) match
+#       every '|'-separated part of `row` (a part matches a cell equal to it or beginning with
+#       it and a space: "test" matches "test (frames >= 780)", "ours" matches "ours (stable 1500)"
+#       but not "ours_mean_speed"; when several rows match, those whose first text column equals
+#       the first part), and the column titled `col`. `table=N` picks the N-th table
+#       (from 1) of a file that has several. `part`: all (default: the whole cell), value (its
+#       leading number), range ("[min, max]"), min, max, pm (what follows "±"), note (the text in
+#       the cell's parentheses, several joined by "; ").
+#   {{table SUITE/STEM}}   (expands to nothing) the table of the {{cell}} and [REF] references
+#       that follow without a SUITE/STEM of their own, up to the next {{table}}
+#   {{ratio [REF] [REF] digits=3}}   first value over second, `digits` significant digits
+#   {{orders [REF] [REF] digits=3}}  log10 of that ratio, `digits` decimals
+#   {{sum [REF] [REF] ... digits=3}} the values' sum; REF is a cell reference without "cell"
+#   {{bench FILE NAME field=real_time unit=us digits=3}}
+#       a Google Benchmark figure of results/bench/FILE (a .json; NAME is the benchmark's name,
+#       its _median aggregate when the file has repetitions); FILE `latest` is the file whose
+#       context has the latest date, and {{benchfile latest}} expands to its path
+#   {{paper 136.8}}   a number quoted from Li et al. 2025 (expands to the text)
+#   {{def 10,000}}    a definition or setting, not a measurement: epochs, learning rates,
+#                     thresholds, scene sizes, seed counts (expands to the text)
+#   {{unconverted}} ... {{/unconverted}}
+#       a passage whose numbers are not generated yet: the output says so in a visible note,
+#       and the numbers test lists it (it is not silently allowed).
+# ---------------------------------------------------------------------------------------------
+MARKUP = re.compile(r"\{\{(/?[a-z]+)(.*?)\}\}", re.S)
+NUMBER = re.compile(r"[-+−]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+UNCONVERTED_NOTE = ("> *The numbers in this passage are not generated from `results/` yet: they were "
+                    "copied by hand, are not checked against the tables, and may be stale.*")
+
+
+class ReportError(Exception):
+    pass
+
+
+def table_path(root, ref):
+    if "/" not in ref:
+        raise ReportError(f"table reference '{ref}' is not SUITE/STEM")
+    suite, stem = ref.split("/", 1)
+    for path in (os.path.join(root, "results", suite, "tables", stem + ".md"),
+                 os.path.join(root, "results", suite, stem + ".md")):
+        if os.path.isfile(path):
+            return path
+    raise ReportError(f"no table results/{suite}/tables/{stem}.md (nor results/{suite}/{stem}.md)")
+
+
+def split_row(line):
+    cells = line.strip()
+    if cells.startswith("|"):
+        cells = cells[1:]
+    if cells.endswith("|"):
+        cells = cells[:-1]
+    return [c.strip() for c in cells.split("|")]
+
+
+def parse_tables(path):
+    """Every Markdown table of the file: a list of (header, key columns, rows)."""
+    with open(path, encoding="utf-8") as fh:
+        lines = fh.read().splitlines()
+    tables, i = [], 0
+    while i < len(lines):
+        if (lines[i].lstrip().startswith("|") and i + 1 < len(lines)
+                and re.fullmatch(r"\s*\|?(\s*:?-+:?\s*\|)+\s*:?-*:?\s*\|?\s*", lines[i + 1])):
+            header = split_row(lines[i])
+            align = split_row(lines[i + 1])
+            keys = [k for k, a in enumerate(align) if a.startswith(":") and not a.endswith(":")]
+            if not keys:
+                keys = [0]
+            rows, i = [], i + 2
+            while i < len(lines) and lines[i].lstrip().startswith("|"):
+                row = split_row(lines[i])
+                if len(row) != len(header):
+                    raise ReportError(f"{path}: a table row has {len(row)} cells, its header {len(header)}")
+                rows.append(row)
+                i += 1
+            tables.append((header, keys, rows))
+        else:
+            i += 1
+    if not tables:
+        raise ReportError(f"{path} holds no Markdown table")
+    return tables
+
+
+def cell_matches(part, cell):
+    return cell == part or cell.startswith(part + " ")
+
+
+class Tables:
+    def __init__(self, root):
+        self.root = root
+        self.cache = {}
+
+    def get(self, ref):
+        path = table_path(self.root, ref)
+        if path not in self.cache:
+            self.cache[path] = parse_tables(path)
+        return path, self.cache[path]
+
+    def cell(self, ref, row, col, table=None):
+        path, tables = self.get(ref)
+        rel = os.path.relpath(path, self.root)
+        if table is not None:
+            if not 1 <= table <= len(tables):
+                raise ReportError(f"{rel} has {len(tables)} tables, not table={table}")
+            tables = [tables[table - 1]]
+        parts = [p.strip() for p in row.split("|")]
+        hits = []
+        for header, keys, rows in tables:
+            if col not in header:
+                continue
+            c = header.index(col)
+            matched = [r for r in rows if all(any(cell_matches(p, r[k]) for k in keys) for p in parts)]
+            if len(matched) > 1:  # "supervised_l2" is also the start of other rows' configuration
+                matched = [r for r in matched if r[keys[0]] == parts[0]] or matched
+            hits += [r[c] for r in matched]
+        if not hits:
+            titles = sorted({h for header, _, _ in tables for h in header})
+            if not any(col in header for header, _, _ in tables):
+                raise ReportError(f"{rel} has no column '{col}' (columns: {', '.join(titles)})")
+            raise ReportError(f"{rel} has no row matching '{row}' in column '{col}'")
+        if len(hits) > 1:
+            raise ReportError(f"{rel}: row '{row}' matches {len(hits)} rows; add a part to the selector")
+        return hits[0]
+
+
+def cell_part(text, part, where):
+    if part == "all":
+        return text
+    if part == "value":
+        m = NUMBER.search(text)
+        if not m or text[:m.start()].strip() not in ("", "@", "diverged @"):
+            raise ReportError(f"{where}: cell '{text}' does not start with a number")
+        return m.group(0)
+    if part in ("range", "min", "max"):
+        m = re.search(r"\[([^\]]*),\s*([^\]]*)\]", text)
+        if not m:
+            raise ReportError(f"{where}: cell '{text}' has no [min, max] range")
+        return {"range": m.group(0), "min": m.group(1).strip(), "max": m.group(2).strip()}[part]
+    if part == "pm":
+        m = re.search(r"±\s*(" + NUMBER.pattern + ")", text)
+        if not m:
+            raise ReportError(f"{where}: cell '{text}' has no '±' interval")
+        return m.group(1)
+    if part == "note":
+        notes = re.findall(r"\(([^()]*)\)", text)
+        if not notes:
+            raise ReportError(f"{where}: cell '{text}' has no (note)")
+        return "; ".join(notes)
+    raise ReportError(f"{where}: unknown part={part} (all, value, range, min, max, pm, note)")
+
+
+def parse_args(text, where):
+    """`key=value` options and positional words; [ ... ] groups stay one positional word."""
+    words, options = [], {}
+    rest = text.strip()
+    while rest:
+        if rest.startswith("["):
+            end = rest.find("]")
+            if end < 0:
+                raise ReportError(f"{where}: unclosed '['")
+            words.append(("ref", rest[1:end]))
+            rest = rest[end + 1:].lstrip()
+            continue
+        m = re.match(r'(?:[^\s"\[]|"[^"]*")+', rest)
+        token = m.group(0)
+        rest = rest[m.end():].lstrip()
+        try:
+            (value,) = shlex.split(token)
+        except ValueError as e:
+            raise ReportError(f"{where}: cannot read '{token}': {e}")
+        if re.match(r"[a-z]+=", value):
+            key, _, v = value.partition("=")
+            options[key] = v
+        else:
+            words.append(("word", value))
+    return words, options
+
+
+def sig(x, digits):
+    if x == 0 or not math.isfinite(x):
+        return repr(x)
+    text = f"{x:.{digits}g}"
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        return f"{mantissa}e{int(exponent):+03d}"
+    return text
+
+
+def to_float(text, where):
+    try:
+        return float(text.replace("−", "-").replace(",", ""))
+    except ValueError:
+        raise ReportError(f"{where}: '{text}' is not a number")
+
+
+class Expander:
+    def __init__(self, root):
+        self.root = root
+        self.tables = Tables(root)
+        self.bench_cache = {}
+        self.default_table = None
+
+    def ref(self, body, where, default_part):
+        words, options = parse_args(body, where)
+        plain = [w for kind, w in words if kind == "word"]
+        if not words and self.default_table:
+            plain = [self.default_table]
+        elif len(plain) != 1 or len(words) != 1:
+            raise ReportError(f"{where}: a cell reference is SUITE/STEM row=\"...\" col=\"...\"")
+        for key in options:
+            if key not in ("row", "col", "part", "table"):
+                raise ReportError(f"{where}: unknown option {key}= in a cell reference")
+        if "row" not in options or "col" not in options:
+            raise ReportError(f"{where}: a cell reference needs row= and col=")
+        table = int(options["table"]) if "table" in options else None
+        text = self.tables.cell(plain[0], options["row"], options["col"], table)
+        return cell_part(text, options.get("part", default_part), f"{where}: {plain[0]}")
+
+    def bench(self, words, options, where):
+        if len(words) != 2 or any(kind != "word" for kind, _ in words):
+            raise ReportError(f"{where}: bench needs FILE NAME")
+        file, name = words[0][1], words[1][1]
+        if file == "latest":
+            file = latest_bench(self.root)
+        path = os.path.join(self.root, "results", "bench", file)
+        if path not in self.bench_cache:
+            self.bench_cache[path] = load_bench(path)
+        rows = self.bench_cache[path]["rows"]
+        if name not in rows:
+            raise ReportError(f"{where}: results/bench/{file} has no benchmark '{name}'")
+        field = options.get("field", "real_time")
+        row = rows[name]
+        if row["error"]:
+            raise ReportError(f"{where}: results/bench/{file}: benchmark '{name}' did not run: {row['error']}")
+        if field not in ("real_time", "cpu_time"):
+            raise ReportError(f"{where}: field={field} (real_time or cpu_time)")
+        value = row[field] * TIME_UNITS[row["unit"]] / TIME_UNITS[options.get("unit", row["unit"])]
+        return sig(value, int(options.get("digits", 3)))
+
+    def expand(self, kind, body, where):
+        if kind == "cell":
+            return self.ref(body, where, "all")
+        words, options = parse_args(body, where)
+        if kind == "table":
+            if len(words) != 1 or words[0][0] != "word" or options:
+                raise ReportError(f"{where}: {{{{table SUITE/STEM}}}} names one table")
+            table_path(self.root, words[0][1])
+            self.default_table = words[0][1]
+            return ""
+        if kind in ("paper", "def"):
+            text = body.strip()
+            if not text:
+                raise ReportError(f"{where}: empty {{{{{kind}}}}}")
+            return text
+        if kind == "benchfile":
+            if [w for _, w in words] != ["latest"] or options:
+                raise ReportError(f"{where}: {{{{benchfile latest}}}} takes no other argument")
+            return "results/bench/" + latest_bench(self.root)
+        if kind == "bench":
+            if "unit" in options and options["unit"] not in TIME_UNITS:
+                raise ReportError(f"{where}: unit={options['unit']} (ns, us, ms, s)")
+            return self.bench(words, options, where)
+        if kind in ("ratio", "orders", "sum"):
+            refs = [w for k, w in words if k == "ref"]
+            if len(refs) != len(words) or (kind != "sum" and len(refs) != 2) or len(refs) < 2:
+                raise ReportError(f"{where}: {kind} needs {'two' if kind != 'sum' else 'two or more'} [references]")
+            values = [to_float(self.ref(r, where, "value"), where) for r in refs]
+            digits = int(options.get("digits", 3))
+            if kind == "sum":
+                return sig(sum(values), digits)
+            if values[1] == 0:
+                raise ReportError(f"{where}: {kind} divides by zero")
+            if kind == "ratio":
+                return sig(values[0] / values[1], digits)
+            return f"{math.log10(values[0] / values[1]):.{digits}f}"
+        raise ReportError(f"{where}: unknown markup {{{{{kind}}}}}")
+
+
+def segments(source, root, name="paper/REPORT.src.md"):
+    """The source cut into (kind, source text, output text, line): kind 'text' for literal text,
+    else the markup's name; literal text inside {{unconverted}} regions has kind 'unconverted'."""
+    expander = Expander(root)
+    out, pos, open_line = [], 0, None
+    for m in MARKUP.finditer(source):
+        line = source.count("\n", 0, m.start()) + 1
+        where = f"{name}:{line}"
+        if m.start() > pos:
+            out.append(("unconverted" if open_line else "text", source[pos:m.start()], source[pos:m.start()], line))
+        kind, body = m.group(1), m.group(2)
+        if kind == "unconverted":
+            if open_line:
+                raise ReportError(f"{where}: {{{{unconverted}}}} inside the one opened at line {open_line}")
+            open_line = line
+            out.append((kind, m.group(0), UNCONVERTED_NOTE, line))
+        elif kind == "/unconverted":
+            if not open_line:
+                raise ReportError(f"{where}: {{{{/unconverted}}}} without {{{{unconverted}}}}")
+            open_line = None
+            out.append((kind, m.group(0), "", line))
+        else:
+            try:
+                text = expander.expand(kind, body, where)
+            except ReportError as e:
+                raise ReportError(str(e) if str(e).startswith(name) else f"{where}: {e}")
+            out.append((kind, m.group(0), text, line))
+        pos = m.end()
+    if open_line:
+        raise ReportError(f"{name}:{open_line}: {{{{unconverted}}}} is never closed")
+    out.append(("unconverted" if open_line else "text", source[pos:], source[pos:], source.count("\n", 0, pos) + 1))
+    if "{{" in "".join(s[2] for s in out if s[0] in ("text", "unconverted")):
+        bad = next(s for s in out if s[0] in ("text", "unconverted") and "{{" in s[2])
+        raise ReportError(f"{name}:{bad[3]}: a '{{{{' that is not markup")
+    return out
+
+
+REPORT_HEADER = ("<!-- Generated by scripts/make_report.py report from paper/REPORT.src.md: edit the source, "
+                 "not this file. -->\n")
+
+
+def render_report(root):
+    src = os.path.join(root, "paper", "REPORT.src.md")
+    if not os.path.isfile(src):
+        raise ReportError(f"no source {src}")
+    with open(src, encoding="utf-8") as fh:
+        source = fh.read()
+    return REPORT_HEADER + "".join(s[2] for s in segments(source, root))
+
+
+# ---------------------------------------------------------------------------------------------
+# Performance: results/bench/*.json (Google Benchmark) -> paper/performance.md.
+# ---------------------------------------------------------------------------------------------
+TIME_UNITS = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
+
+
+def load_bench(path):
+    """One row per benchmark name: its times (the _median aggregate when the file has
+    repetitions, else the median of its runs), unit and family; plus the file's context."""
+    rel = os.path.relpath(path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except FileNotFoundError:
+        raise ReportError(f"no benchmark file {rel}")
+    except json.JSONDecodeError as e:
+        raise ReportError(f"{rel} is not JSON: {e}")
+    if not isinstance(data, dict) or not isinstance(data.get("benchmarks"), list) or "context" not in data:
+        raise ReportError(f"{rel} is not Google Benchmark JSON (no 'context' and 'benchmarks')")
+    rows, iterations = {}, {}
+    for b in data["benchmarks"]:
+        try:
+            name, unit = b["run_name"] if "run_name" in b else b["name"], b["time_unit"]
+            real, cpu = float(b["real_time"]), float(b["cpu_time"])
+        except (KeyError, TypeError, ValueError):
+            raise ReportError(f"{rel}: a benchmark entry lacks name, real_time, cpu_time or time_unit")
+        if unit not in TIME_UNITS:
+            raise ReportError(f"{rel}: benchmark '{name}' has time_unit '{unit}'")
+        family = name.split("/")[0]
+        entry = {"real_time": real, "cpu_time": cpu, "unit": unit, "family": family,
+                 "error": b.get("error_message", "error") if b.get("error_occurred") else None}
+        if b.get("run_type") == "aggregate":
+            if b.get("aggregate_name") == "median":
+                rows[name] = dict(entry, repetitions=b.get("repetitions"), source="median")
+        else:
+            iterations.setdefault(name, []).append(entry)
+    for name, runs in iterations.items():
+        if name not in rows:
+            # Without a _median aggregate (an interrupted file): the median of the runs there are.
+            med = {f: sorted(r[f] for r in runs)[len(runs) // 2] if len(runs) % 2 else
+                   sum(sorted(r[f] for r in runs)[len(runs) // 2 - 1:len(runs) // 2 + 1]) / 2
+                   for f in ("real_time", "cpu_time")}
+            rows[name] = dict(runs[0], **med, repetitions=len(runs), source="runs")
+    return {"rows": rows, "context": data["context"]}
+
+
+def latest_bench(root):
+    """The results/bench/*.json file whose context has the latest date."""
+    bench_dir = os.path.join(root, "results", "bench")
+    files = sorted(f for f in os.listdir(bench_dir) if f.endswith(".json")) if os.path.isdir(bench_dir) else []
+    if not files:
+        raise ReportError("no results/bench/*.json")
+    return max(files, key=lambda f: (str(load_bench(os.path.join(bench_dir, f))["context"].get("date", "")), f))
+
+
+def bench_commit(path, context):
+    for key in ("latentbench_commit", "commit", "git_commit"):
+        if context.get(key):
+            return str(context[key])
+    m = re.fullmatch(r"\d{4}-\d{2}-\d{2}-([0-9a-f]{7,40})\.json", os.path.basename(path))
+    return m.group(1) if m else "not recorded"
+
+
+def render_performance(root):
+    bench_dir = os.path.join(root, "results", "bench")
+    files = sorted(f for f in os.listdir(bench_dir) if f.endswith(".json")) if os.path.isdir(bench_dir) else []
+    if not files:
+        raise ReportError(f"no results/bench/*.json under {root}")
+    parts = ["<!-- Generated by scripts/make_report.py performance from results/bench/*.json: do not edit. -->\n",
+             "# Performance\n\n",
+             "Every figure below is read from a Google Benchmark JSON file under `results/bench/` "
+             "(`scripts/run bench` writes them). Times are per iteration of the benchmark, in the unit "
+             "the benchmark reports; with repetitions, the median over them. The machine is named in "
+             "each file's context; measurements on a shared machine are upper bounds.\n"]
+    for f in files:
+        path = os.path.join(bench_dir, f)
+        data = load_bench(path)
+        ctx = data["context"]
+        parts.append(f"\n## `results/bench/{f}`\n")
+        facts = [f"commit: {bench_commit(path, ctx)}", f"date: {ctx.get('date', 'not recorded')}"]
+        if "num_cpus" in ctx:
+            facts.append(f"CPUs: {ctx['num_cpus']}" + (f" at {ctx['mhz_per_cpu']} MHz" if "mhz_per_cpu" in ctx else ""))
+        if "load_avg" in ctx:
+            facts.append("load average: " + ", ".join(f"{x:.2f}" for x in ctx["load_avg"]))
+        if "library_build_type" in ctx:
+            facts.append(f"Google Benchmark library build: {ctx['library_build_type']}")
+        if "executable" in ctx:
+            facts.append(f"executable: `{ctx['executable']}`")
+        parts.append("".join(f"- {x}\n" for x in facts))
+        families = {}
+        for name, row in data["rows"].items():
+            families.setdefault(row["family"], []).append((name, row))
+        for family in sorted(families):
+            parts.append(f"\n### {family}\n\n| benchmark | real time | CPU time | unit | repetitions |\n"
+                         "|:--|--:|--:|:--|--:|\n")
+            for name, row in sorted(families[family]):
+                if row["error"]:
+                    # The file's message may name the measuring machine's absolute paths: keep the file names.
+                    message = re.sub(r"(?<![\w.])/(?:[^\s/']+/)+", "", row["error"]).replace("|", "/")
+                    parts.append(f"| `{name}` | did not run: {message} | | | |\n")
+                    continue
+                reps = f"{row['repetitions']}"
+                if row["source"] == "runs" and row["repetitions"] > 1:
+                    reps += " (median of the runs; no aggregate)"
+                parts.append(f"| `{name}` | {sig(row['real_time'], 4)} | {sig(row['cpu_time'], 4)} | "
+                             f"{row['unit']} | {reps} |\n")
+    return "".join(parts)
+
+
+def write_atomic(path, text):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path + ".tmp", "w", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(path + ".tmp", path)
+
+
+def generate(kind, root, check):
+    try:
+        text = render_report(root) if kind == "report" else render_performance(root)
+    except ReportError as e:
+        fail(str(e))
+    path = os.path.join(root, "paper", "REPORT.md" if kind == "report" else "performance.md")
+    if check:
+        current = open(path, encoding="utf-8").read() if os.path.exists(path) else None
+        if current != text:
+            fail(f"{path} is not what `make_report.py {kind}` generates: regenerate it")
+        print(f"{path} is up to date")
+        return
+    write_atomic(path, text)
+    print(path)
+
+
 if __name__ == "__main__":
-    if len(sys.argv) == 4 and sys.argv[1] == "publish":
-        publish(sys.argv[2], sys.argv[3])
-    elif len(sys.argv) == 2 and sys.argv[1] == "tables":
+    argv = sys.argv[1:]
+    if len(argv) >= 2 and argv[0] == "--root":
+        ROOT = os.path.abspath(argv[1])
+        argv = argv[2:]
+    if len(argv) == 3 and argv[0] == "publish":
+        publish(argv[1], argv[2])
+    elif argv == ["tables"]:
         tables()
+    elif argv and argv[0] in ("report", "performance") and argv[1:] in ([], ["--check"]):
+        generate(argv[0], ROOT, argv[1:] == ["--check"])
     else:
         print(__doc__)
         sys.exit(2)

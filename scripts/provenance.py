@@ -109,8 +109,16 @@ def reproduce(name, cli, out):
     out = pathlib.Path(out) if out else ROOT / "runs" / "reproduce" / name
     if fnv1a64(suite_file.read_bytes()) != prov.get("suite_hash"):
         print(f"note: {prov['suite_file']} changed since publication: differences may come from the suite file")
-    print(f"reproducing results/{name}: {cli} run {prov['suite_file']} -o {out}", flush=True)
-    rc = subprocess.run([cli, "run", str(suite_file), "-o", str(out)]).returncode
+    # A subset run (`--scene`, `--integrator`) is reproduced as the same subset.
+    subset, command = [], prov.get("command") or []
+    for k, arg in enumerate(command[:-1]):
+        if arg in ("--scene", "--integrator"):
+            subset += [arg, command[k + 1]]
+    if not command and (folder / "experiment.toml").exists() and \
+            (folder / "experiment.toml").read_text().startswith("# subset run"):
+        print(f"note: results/{name} was a subset run whose command was not recorded: the whole suite is rerun")
+    print(f"reproducing results/{name}: {cli} run {prov['suite_file']} -o {out} {' '.join(subset)}", flush=True)
+    rc = subprocess.run([cli, "run", str(suite_file), "-o", str(out), *subset]).returncode
     if rc != 0:
         fail(f"`latentbench run` exited {rc}; nothing compared")
     compare = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / "compare_tables.py"), str(folder / "tables"),
