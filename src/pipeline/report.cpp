@@ -12,6 +12,7 @@
 #include "paper/paper_numbers.hpp"
 #include "pipeline/deviations.hpp"
 #include "pipeline/plan.hpp"
+#include "pipeline/training_curves.hpp"
 #include "scene/scene.hpp"
 
 namespace lb {
@@ -312,6 +313,7 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
         }
         emit(methods, "methods_" + r.label);
         write_csv(observations_table(r), dir + "/observations_" + r.label + ".csv");
+        write_training_curves(r, dir);
         if (!embeddings.rows.empty()) emit(embeddings, "embedding_" + r.label);
         for (const AblationSpec& ab : ex.ablations) {
             // Only on scenes that ran every method of the ablation (a scene may run a subset).
