@@ -91,7 +91,7 @@ def plot_method(method, seeds, title, out_dir):
         start[stage] = offset
         offset += length[stage]
     colours = pc.colour_map(list(seeds))
-    drawn = False
+    drawn = any_validation = False
     for seed, stages in seeds.items():
         label = f"seed {seed}" if seed != "" else "run"
         for i, (stage, epochs, train, val) in enumerate(stages):
@@ -103,7 +103,7 @@ def plot_method(method, seeds, title, out_dir):
             if np.isfinite(v).any():
                 ax.plot(x, v, color=colours[seed], linewidth=1.0, linestyle="--",
                         label=f"{label} (validation)" if i == 0 else None)
-                drawn = True
+                drawn = any_validation = True
     if drawn:
         ax.set_yscale("log")
     if len(order) > 1:
@@ -112,7 +112,7 @@ def plot_method(method, seeds, title, out_dir):
             ax.text(start[stage] + 0.5, 1.0, f" {stage}", transform=ax.get_xaxis_transform(), fontsize=8,
                     va="top", ha="left", color="0.3")
     ax.set_xlabel("epoch" + (" (stages one after the other)" if len(order) > 1 else ""))
-    ax.set_ylabel("training loss (log scale)")
+    ax.set_ylabel("loss (log scale; validation dashed)" if any_validation else "training loss (log scale)")
     ax.set_title(f"{title}: {method}")
     pc.style_axes(ax)
     if drawn:

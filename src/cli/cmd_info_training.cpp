@@ -19,6 +19,11 @@ std::string text_attribute(const h5::File& f, const std::string& key)
     return f.has_attribute("/", key) ? f.attribute_string("/", key) : std::string("?");
 }
 
+std::string int_attribute(const h5::File& f, const std::string& key)
+{
+    return f.has_attribute("/", key) ? std::to_string(f.attribute_int("/", key)) : std::string("?");
+}
+
 void print_curves(const h5::File& f, bool trains)
 {
     const nn::TrainingCurves curves = nn::load_training_curves(f, "");
@@ -46,8 +51,8 @@ bool describe_training_file(const std::string& path)
     const std::string format = f.attribute_string("/", "format");
     if (format == kAutoencoderFormat) {
         std::printf("autoencoder of scene %s: latent %s, pca %s, hidden %s, encoding %s, seed %s\n",
-                    text_attribute(f, "scene").c_str(), text_attribute(f, "latent_dim").c_str(),
-                    text_attribute(f, "pca_dim").c_str(), text_attribute(f, "hidden").c_str(),
+                    text_attribute(f, "scene").c_str(), int_attribute(f, "latent_dim").c_str(),
+                    int_attribute(f, "pca_dim").c_str(), text_attribute(f, "hidden").c_str(),
                     text_attribute(f, "encoding").c_str(), text_attribute(f, "seed").c_str());
         print_curves(f, true);
         return true;

@@ -62,7 +62,7 @@ plots = false
 paper_tables = false
 )";
 
-struct Run {
+struct CurveRows {
     std::vector<double> train;  ///< the run's train_loss column, in order
     std::vector<std::string> stages;
     bool validation = false;
@@ -80,9 +80,9 @@ TEST(TrainingCurves, ASuiteWritesEveryRunsCurveEndingAtItsFinalLoss)
     ASSERT_TRUE(fs::exists(csv));
     const Table t = read_csv(csv);
     ASSERT_EQ(t.columns, (std::vector<std::string>{"method", "seed", "stage", "epoch", "train_loss", "validation_loss"}));
-    std::map<std::string, Run> runs;  // "method seed" -> its rows
+    std::map<std::string, CurveRows> runs;  // "method seed" -> its rows
     for (const auto& row : t.rows) {
-        Run& r = runs[row[0].text + " " + row[1].text];
+        CurveRows& r = runs[row[0].text + " " + row[1].text];
         ASSERT_TRUE(row[4].value.has_value()) << row[4].text;
         if (r.stages.empty() || r.stages.back() != row[2].text) {
             r.stages.push_back(row[2].text);
@@ -109,9 +109,11 @@ TEST(TrainingCurves, ASuiteWritesEveryRunsCurveEndingAtItsFinalLoss)
     for (const auto& e : expected) {
         SCOPED_TRACE(e.key);
         ASSERT_TRUE(runs.count(e.key));
-        const Run& r = runs[e.key];
+        const CurveRows& r = runs[e.key];
         EXPECT_EQ(r.stages, e.stages);
-        if (e.epochs > 0) EXPECT_EQ(r.train.size(), e.epochs);
+        if (e.epochs > 0) {
+            EXPECT_EQ(r.train.size(), e.epochs);
+        }
         for (double v : r.train) EXPECT_TRUE(std::isfinite(v) && v > 0.0) << v;
         // The file's final_loss is the curve's last value, in the file and in the table.
         const h5::File f = h5::File::open(e.file);
