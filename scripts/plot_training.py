@@ -7,10 +7,11 @@ stage, epoch, train_loss, validation_loss) and writes one PNG per method,
   <output dir>/training_<method>.png
 
 with every seed in one plot (one colour per seed; training loss solid, validation loss
-dashed), the stages of a multi-stage training (the autoencoder's physics fine-tuning,
-Tan et al.'s three stages) one after the other with their boundaries marked, and the
-loss on a log scale. Prints the paths of the PNGs it wrote. A missing or malformed
-input is reported as `plot_training.py: error: ...` with exit status 1.
+dashed), the loss on a log scale (a symmetric log scale if it takes values <= 0, as a
+self-supervised energy may), and the stages of a multi-stage training (the autoencoder's
+physics fine-tuning, Tan et al.'s three stages) one after the other with their boundaries
+marked. Prints the paths of the PNGs it wrote. A missing or malformed input is reported
+as `plot_training.py: error: ...` with exit status 1.
 
 Example:
   /usr/bin/python3 scripts/plot_training.py runs/quickstart/tables/training_cloth.csv \\
@@ -71,9 +72,16 @@ def read_curves(path):
     return methods
 
 
-def positive(values):
-    v = np.asarray(values, dtype=float)
-    return np.where(np.isfinite(v) & (v > 0), v, np.nan)
+def y_scale(seeds):
+    """("log", None) if every recorded loss is positive; else ("symlog", linthresh): a
+    self-supervised loss is an energy and may be negative, which a log axis would hide."""
+    values = np.array([x for stages in seeds.values() for _, _, train, val in stages for x in train + val], dtype=float)
+    values = values[np.isfinite(values)]
+    if values.size == 0 or (values > 0).all():
+        return "log", None
+    magnitudes = np.abs(values[values != 0])
+    top = magnitudes.max() if magnitudes.size else 1.0
+    return "symlog", max(magnitudes.min() if magnitudes.size else 1.0, 1e-6 * top)
 
 
 def plot_method(method, seeds, title, out_dir):
@@ -91,12 +99,13 @@ def plot_method(method, seeds, title, out_dir):
         start[stage] = offset
         offset += length[stage]
     colours = pc.colour_map(list(seeds))
+    scale, linthresh = y_scale(seeds)
     drawn = any_validation = False
     for seed, stages in seeds.items():
         label = f"seed {seed}" if seed != "" else "run"
         for i, (stage, epochs, train, val) in enumerate(stages):
             x = np.asarray(epochs) + start[stage]
-            t, v = positive(train), positive(val)
+            t, v = np.asarray(train, dtype=float), np.asarray(val, dtype=float)
             if np.isfinite(t).any():
                 ax.plot(x, t, color=colours[seed], linewidth=1.2, label=label if i == 0 else None)
                 drawn = True
@@ -104,15 +113,19 @@ def plot_method(method, seeds, title, out_dir):
                 ax.plot(x, v, color=colours[seed], linewidth=1.0, linestyle="--",
                         label=f"{label} (validation)" if i == 0 else None)
                 drawn = any_validation = True
-    if drawn:
+    if drawn and scale == "log":
         ax.set_yscale("log")
+    elif drawn:
+        ax.set_yscale("symlog", linthresh=linthresh)
     if len(order) > 1:
         for stage in order:
             ax.axvline(start[stage] + 0.5, color=pc.GHOST_COLOUR, linewidth=0.8, linestyle=":")
             ax.text(start[stage] + 0.5, 1.0, f" {stage}", transform=ax.get_xaxis_transform(), fontsize=8,
                     va="top", ha="left", color="0.3")
     ax.set_xlabel("epoch" + (" (stages one after the other)" if len(order) > 1 else ""))
-    ax.set_ylabel("loss (log scale; validation dashed)" if any_validation else "training loss (log scale)")
+    what = "loss" if any_validation else "training loss"
+    axis = "log scale" if scale == "log" else "symlog: has values ≤ 0"
+    ax.set_ylabel(f"{what} ({axis}{'; validation dashed' if any_validation else ''})")
     ax.set_title(f"{title}: {method}")
     pc.style_axes(ax)
     if drawn:
