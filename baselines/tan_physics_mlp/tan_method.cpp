@@ -112,6 +112,7 @@ public:
         double seconds_trained = 0.0, seconds_before = 0.0;
         bool time_limited = false;
         const int budgets[3] = {o.stage1_epochs, o.stage2_epochs, o.stage3_epochs};
+        nn::TrainingCurves curves;
         for (int k = 0; k < 3; ++k) {
             const TanStageReport& r = reports[k];
             const std::string p = "tan.stage" + std::to_string(k + 1) + ".";
@@ -125,6 +126,8 @@ public:
             out.set_attribute("/", p + "mphys", r.parts_after.mphys);
             out.set_attribute("/", p + "epochs", (long long)r.loop.epochs_run);
             out.set_attribute("/", p + "seconds", r.loop.seconds);
+            curves.push_back(r.loop.curve);
+            curves.back().stage = "stage" + std::to_string(k + 1);
             epochs += r.loop.epochs_run;
             budget += budgets[k];
             seconds_trained += r.loop.seconds;
@@ -142,6 +145,9 @@ public:
         out.set_attribute("/", "max_seconds", o.max_seconds);
         out.set_attribute("/", "time_limited", (long long)time_limited);
         out.set_attribute("/", "stopped_early", 0LL);
+        // The loss per epoch of every stage that ran, and the last one's last loss.
+        nn::save_training_curves(out, "", curves);
+        if (const double last = nn::last_train_loss(curves); !std::isnan(last)) out.set_attribute("/", "final_loss", last);
         log_info("tan_physics_mlp: %lld epochs over the stages (%.1f s training, %.1f s in all), K = %ld", epochs,
                  seconds_trained, seconds_in_all, long(trainer.window()));
     }

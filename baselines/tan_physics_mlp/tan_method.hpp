@@ -16,7 +16,8 @@
 // Artefact: the fine-tuned autoencoder ("tan_ae." prefix, Autoencoder::save_into), the MLP
 // ("integrator.", LatentMlpModel::save), per stage tan.stage<k>.{ran, loss_before, loss_after,
 // recon, ephys, sim, mphys (after), epochs, seconds}, the budget attributes of every learned
-// method, and the embedding metrics (eval/embedding_metrics.hpp) of the shared autoencoder,
+// method, the loss per epoch of each stage that ran (training_curve/stage<k>,
+// nn/training_curve.hpp) with final_loss the last stage's last loss, and the embedding metrics (eval/embedding_metrics.hpp) of the shared autoencoder,
 // of its own after stage 1 and of its own at the end.
 #include "methods/method.hpp"
 

@@ -62,9 +62,11 @@ void register_simulate(CLI::App& app)
 void register_info(CLI::App& app)
 {
     auto path = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand("info", "Describe a latentbench HDF5 dataset");
-    cmd->add_option("file", *path, "Dataset HDF5 file")->required();
+    CLI::App* cmd = app.add_subcommand("info", "Describe a latentbench HDF5 dataset, autoencoder or method artefact "
+                                               "(with its training curve)");
+    cmd->add_option("file", *path, "Dataset, autoencoder or artefact HDF5 file")->required();
     cmd->callback([path] {
+        if (describe_training_file(*path)) return;
         const Dataset data = load_dataset(*path);
         std::printf("scene %s%s, %s, %ld vertices, %ld elements, %zu Dirichlet, dt %.4g\n",
                     data.scene_name.c_str(), data.variant.empty() ? "" : (" (" + data.variant + ")").c_str(),

@@ -115,7 +115,7 @@ void register_train_ae(CLI::App& app)
         Autoencoder ae(data.physics, options, options.seed);
         ae.set_scene_name(data.scene_name);
         const AutoencoderTrainSummary s = train_autoencoder(ae, data, options);
-        ae.save(args->output);
+        ae.save(args->output, s.curves);
         std::printf("wrote %s: scene %s, %ld features -> latent %ld (pca %ld), %d epochs (best %d%s%s), "
                     "validation MSE %.4e m², validation relative RMSE %.4e, %.1f s\n",
                     args->output.c_str(), data.scene_name.c_str(), long(ae.num_features()), long(ae.latent_dim()),

@@ -34,6 +34,10 @@ void register_page(CLI::App& app);
 void set_exit_status(int status);
 int exit_status();
 
+/// `info` on a method's artefact or an autoencoder file: print what it is and a summary of
+/// its training curves; false (nothing printed) for any other file (a dataset).
+bool describe_training_file(const std::string& path);
+
 /// `plan` and `submit`: the sweep and the unit counts (and with list_units each unit).
 void print_unit_plan(const ExperimentConfig& ex, const ExperimentPlan& plan, bool list_units);
 

@@ -237,9 +237,14 @@ std::string Autoencoder::content_hash()
     return h.hex();
 }
 
-void Autoencoder::save(const std::string& path)
+void Autoencoder::save(const std::string& path, const nn::TrainingCurves& curves)
 {
-    h5::write_file_atomically(path, [&](h5::File& file) { save_into(file, ""); });
+    h5::write_file_atomically(path, [&](h5::File& file) {
+        save_into(file, "");
+        nn::save_training_curves(file, "", curves);
+        const double final_loss = nn::last_train_loss(curves);
+        if (!std::isnan(final_loss)) file.set_attribute("/", "final_loss", final_loss);
+    });
 }
 
 void Autoencoder::save_into(h5::File& file, const std::string& prefix)
@@ -515,6 +520,8 @@ void finetune_physics(Autoencoder& ae, const Dataset& data, const AutoencoderOpt
     summary.physics_ephys_before = before.ephys;
     summary.physics_ephys_after = after.ephys;
     summary.physics_epochs_run = run.epochs_run;
+    summary.curves.push_back(run.curve);
+    summary.curves.back().stage = "physics";
     summary.physics_seconds = run.seconds_before + timer.seconds();
     summary.seconds_before += run.seconds_before;  // the earlier processes' fine-tuning
     summary.time_limited = summary.time_limited || run.time_limited;
@@ -592,6 +599,8 @@ AutoencoderTrainSummary train_autoencoder(Autoencoder& ae, const Dataset& data, 
     AutoencoderLearner learner(ae, train_features, val_features);
     AutoencoderTrainSummary summary;
     static_cast<nn::TrainingLoopSummary&>(summary) = nn::run_training_loop(learner, loop, print);
+    summary.curves = {summary.curve};
+    summary.curves.front().stage = "autoencoder";
     // No epoch run: the PCA-initialised network.
     if (summary.best_epoch == 0) summary.best_validation = eval_mse(ae, val_features);
     summary.validation_relative_rmse_held_out = ae.relative_rmse(val_positions, val_targets);

@@ -11,7 +11,9 @@
 //   format "latentbench.autoencoder/1", latent_dim, pca_dim (after clamping),
 //   hidden ("200,200,200", decoder order), batch_norm, residual (0/1),
 //   encoding ("rod_root" | "dirichlet_mean"), num_features F, num_dofs 3N,
-//   scene (dataset scene name), seed.
+//   scene (dataset scene name), seed; if saved with its training curves (train_autoencoder's
+//   summary), training_curve/* (nn/training_curve.hpp) and final_loss, the last stage's last
+//   epoch loss (files written before curves were recorded have neither).
 // The decoder maps z to features f; positions are x = P f + offset(bc targets)
 // (bc_encoding.hpp), so scripts/nn_reference.py --prefix decoder. gives f.
 #include <cstdint>
@@ -86,6 +88,9 @@ struct AutoencoderTrainSummary : nn::TrainingLoopSummary {
     double physics_ephys_before = 0.0, physics_ephys_after = 0.0;
     int physics_epochs_run = 0;
     double physics_seconds = 0.0;
+    /// The loss per epoch of each training run, in order: "autoencoder" (reconstruction MSE,
+    /// with validation) and, after a physics fine-tuning, "physics" (its training loss).
+    nn::TrainingCurves curves;
 };
 
 class Autoencoder {
@@ -141,7 +146,9 @@ public:
     std::string content_hash();
 
     /// Written atomically (temporary file, then rename). See the file format above.
-    void save(const std::string& path);
+    /// `curves` (train_autoencoder's summary): stored with nn::save_training_curves, and
+    /// the attribute final_loss = the last stage's last training loss.
+    void save(const std::string& path, const nn::TrainingCurves& curves = {});
     /// Throws IoError naming the file if it is not an autoencoder file or its feature
     /// count / encoding kind does not match `physics`.
     static Autoencoder load(const std::string& path, const PhysicsSpec& physics);

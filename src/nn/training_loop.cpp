@@ -29,9 +29,13 @@ struct Counters {
     /// Wall-clock seconds of training up to the checkpoint, earlier processes included (0 from
     /// a checkpoint written before it was recorded).
     double seconds = 0.0;
+    /// The loss of every epoch so far (validation: one per epoch if the learner has it).
+    std::vector<double> train_curve, validation_curve;
 };
 
 constexpr const char* kTrainerKey = "trainer";
+/// The loss curve's datasets in a checkpoint (nn/training_curve.hpp, save_curve_data).
+constexpr const char* kCurveGroup = "curve";
 
 std::string trainer_of(const TrainingLoopOptions& o) { return o.trainer.empty() ? o.label : o.trainer; }
 
@@ -55,6 +59,10 @@ void write_checkpoint(const std::string& path, const std::string& trainer, const
         f.set_attribute("/", "epochs_since_improvement", (long long)c.epochs_since_improvement);
         f.set_attribute("/", "last_loss", exact_text(c.last_loss));
         f.set_attribute("/", "train_seconds", exact_text(c.seconds));
+        TrainingCurve curve;
+        curve.train_loss = c.train_curve;
+        curve.validation_loss = c.validation_curve;
+        save_curve_data(f, kCurveGroup, curve);
         learner.save_state(f);
     });
 }
@@ -123,6 +131,37 @@ void refuse_foreign_checkpoint(const std::string& path, const TrainingLoopOption
     if (!other.empty()) refuse(other);
 }
 
+/// The checkpoint's loss curve into `t` (whose counters are read): the reason it is
+/// inconsistent with them, or empty. A checkpoint written before curves were recorded has
+/// none: its epochs get NaN ("not recorded"), except what the counters know (the last
+/// epoch's loss, the best validation loss at its epoch).
+std::string read_curve(const h5::File& f, bool validation, Counters& t)
+{
+    const std::size_t epochs = std::size_t(t.epoch);
+    if (!f.exists(std::string(kCurveGroup) + "/train_loss")) {
+        constexpr double unknown = std::numeric_limits<double>::quiet_NaN();
+        t.train_curve.assign(epochs, unknown);
+        if (epochs > 0) t.train_curve.back() = t.last_loss;
+        if (validation) {
+            t.validation_curve.assign(epochs, unknown);
+            if (t.best_epoch > 0) t.validation_curve[std::size_t(t.best_epoch - 1)] = t.best_validation;
+        }
+        return {};
+    }
+    TrainingCurve curve = load_curve_data(f, kCurveGroup);
+    if (curve.train_loss.size() != epochs)
+        return "its loss curve has " + std::to_string(curve.train_loss.size()) + " epochs, its counters " +
+               std::to_string(epochs);
+    if (epochs > 0 && !(curve.train_loss.back() == t.last_loss))
+        return "its loss curve does not end at its last loss";
+    if (validation && curve.validation_loss.size() != epochs)
+        return "its validation curve has " + std::to_string(curve.validation_loss.size()) + " epochs, its counters " +
+               std::to_string(epochs);
+    t.train_curve = std::move(curve.train_loss);
+    t.validation_curve = validation ? std::move(curve.validation_loss) : std::vector<double>{};
+    return {};
+}
+
 /// Resume, all or nothing: the reason it cannot be resumed (nothing changed), or empty.
 std::string read_checkpoint(const std::string& path, const Fingerprint& fingerprint, Learner& learner,
                             std::vector<ParameterRef>& params, Adam& adam, Counters& c)
@@ -171,6 +210,7 @@ std::string read_checkpoint(const std::string& path, const Fingerprint& fingerpr
         }
         if (std::isnan(t.best_validation) || !std::isfinite(t.last_loss))
             return "its loss record is not finite";
+        if (std::string reason = read_curve(f, learner.has_validation(), t); !reason.empty()) return reason;
         learner.load_state(f);  // all or nothing; below nothing can fail (shapes checked)
         adam.set_state(std::move(s));
         for (std::size_t i = 0; i < params.size(); ++i) params[i].value = values[i];
@@ -336,6 +376,8 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
         if (!std::isfinite(c.last_loss) || !std::isfinite(val))
             throw NumericalError(o.label + ": the loss became non-finite at epoch " + std::to_string(c.epoch) +
                                  " (try a smaller learning rate)");
+        c.train_curve.push_back(c.last_loss);
+        if (validation) c.validation_curve.push_back(val);
         if (validation) track_validation(learner, val, c);
         if (c.epoch % o.checkpoint_every == 0) checkpoint();
         if (o.progress) report_epoch(progress, c, validation, val);
@@ -366,6 +408,9 @@ TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOption
     summary.best_epoch = c.best_epoch;
     summary.best_validation = c.best_validation;
     summary.final_loss = c.last_loss;
+    summary.curve.stage = trainer_of(o);
+    summary.curve.train_loss = c.train_curve;
+    summary.curve.validation_loss = c.validation_curve;
     summary.seconds = seconds();
     summary.seconds_before = seconds_before;
     if (o.progress) {

@@ -17,7 +17,8 @@
 //
 // Checkpoints (nn/checkpoint.hpp): every checkpoint_every epochs and at the end (not
 // after an interruption), written atomically. Contents: the fingerprint, the counters,
-// parameters ("param/<name>"), Adam moments and step, plus the learner's extra state.
+// parameters ("param/<name>"), Adam moments and step, the loss curve so far ("curve/":
+// nn/training_curve.hpp; a resumed run continues it), plus the learner's extra state.
 // At the start an existing checkpoint is resumed only if resume is on, its fingerprint
 // matches and every tensor has the expected shape (checked before anything is copied);
 // otherwise it is set aside as `<path>.stale.<n>` with a log line giving the reason and
@@ -37,6 +38,7 @@
 #include "nn/adam.hpp"
 #include "nn/checkpoint.hpp"
 #include "nn/layer.hpp"
+#include "nn/training_curve.hpp"
 
 namespace lb::nn {
 
@@ -109,6 +111,11 @@ struct TrainingLoopSummary {
     int best_epoch = 0;            ///< with validation: the epoch whose weights were kept
     double best_validation = 0.0;
     double final_loss = 0.0;       ///< the last epoch's training loss
+    /// Every epoch's training loss (and validation loss, if the learner has it), a resumed
+    /// run's earlier epochs included (from its checkpoint; NaN if that checkpoint was written
+    /// before curves were recorded). train_loss.back() == final_loss after ≥ 1 epoch. `stage`
+    /// is the trainer's name; callers that store it name it (nn/training_curve.hpp).
+    TrainingCurve curve;
     /// Wall-clock seconds of training, a resumed run's earlier processes included (their time is
     /// unknown, so left out, if the checkpoint was written before it was recorded).
     double seconds = 0.0;

@@ -20,6 +20,7 @@
 #include "paper/paper_numbers.hpp"
 #include "pipeline/deviations.hpp"
 #include "pipeline/plan.hpp"
+#include "pipeline/training_curves.hpp"
 #include "scene/scene.hpp"
 
 namespace lb {
@@ -393,6 +394,7 @@ std::vector<std::string> write_tables(const ExperimentConfig& ex, const std::vec
         Table rollouts = observations_table(r);
         rollouts.add_note(suite_note);
         write_csv(rollouts, dir + "/rollouts_" + r.label + ".csv");
+        write_training_curves(r, dir);
         if (!embeddings.rows.empty()) emit(embeddings, "embedding_" + r.label);
         for (const AblationSpec& ab : ex.ablations) {
             // Only on scenes that ran every method of the ablation (a scene may run a subset).

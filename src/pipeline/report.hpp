@@ -7,6 +7,7 @@
 
 #include "eval/embedding_metrics.hpp"
 #include "eval/metrics.hpp"
+#include "nn/training_curve.hpp"
 #include "pipeline/experiment.hpp"
 
 namespace lb {
@@ -41,6 +42,9 @@ struct MethodResult {
     std::vector<std::uint64_t> seeds;
     std::vector<RolloutSummary> per_seed;
     std::vector<TrainingBudget> budgets;  ///< one per fit (per seed)
+    /// Parallel to `budgets`: each fit's loss per epoch (empty: nothing trained, or an
+    /// artefact written before curves were recorded). pipeline/training_curves.hpp.
+    std::vector<nn::TrainingCurves> curves;
     /// The sweep point of this row ("training.noise_fraction=0.05, seeds=1"); "" for a
     /// row shared by every point, or without a [sweep].
     std::string point;
@@ -61,6 +65,9 @@ struct SceneResult {
     double dataset_step_ms = 0.0;
     double jvp_ms = 0.0;         ///< one-vertex JVP through the decoder (float)
     std::string decoder_layers;
+    /// The scene's autoencoder (of its first scene unit): its training curves and seed.
+    nn::TrainingCurves autoencoder_curves;
+    std::uint64_t autoencoder_seed = 0;
     std::vector<MethodResult> methods;
 };
 

@@ -25,6 +25,7 @@
 #include "pipeline/plots.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/stage_cache.hpp"
+#include "pipeline/training_curves.hpp"
 #include "scene/scene.hpp"
 
 namespace lb {
@@ -184,6 +185,8 @@ public:
         const AutoencoderOptions& ao = ls.ae->options();  // as trained: the PCA width after clamping
         r.decoder_layers = format_list(ao.hidden) + (ao.pca_dim > 0 ? ", " + std::to_string(ao.pca_dim) : "");
         r.jvp_ms = measure_jvp_ms(*ls.ae);
+        r.autoencoder_curves = nn::load_training_curves(h5::File::open(su.outputs[1].file), "");
+        r.autoencoder_seed = ls.ae->seed();
         for (const PlannedRow& row : m_plan.rows) {
             if (row.scene_index == s) r.methods.push_back(method_result(row));
         }
@@ -264,7 +267,7 @@ private:
                         Autoencoder ae(ls.data.physics, ao, ao.seed);
                         const AutoencoderTrainSummary s = train_autoencoder(ae, ls.data, ao);
                         ae.set_scene_name(ls.scene.name);
-                        ae.save(file);
+                        ae.save(file, s.curves);
                         if (s.physics_ran)
                             log_info("%s: autoencoder validation relative RMSE %.3e before the physics "
                                      "fine-tuning (held out), %.3e after it (trained on)",
@@ -407,6 +410,9 @@ private:
             mr.summaries.insert(mr.summaries.end(), summaries.begin(), summaries.end());
             mr.budgets.push_back(u.fit_unit.empty() ? TrainingBudget{}
                                                     : read_budget(m_plan.find(u.fit_unit)->outputs[0].file));
+            mr.curves.push_back(u.fit_unit.empty() ? nn::TrainingCurves{}
+                                                   : nn::load_training_curves(
+                                                         h5::File::open(m_plan.find(u.fit_unit)->outputs[0].file), ""));
             if (!row.seeds.empty()) {
                 mr.seeds.push_back(row.seeds[k]);
                 mr.per_seed.push_back(aggregate(summaries));
@@ -484,6 +490,10 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
         for (const SceneResult& r : scenes) {
             const std::vector<std::string> f = plot_scene(r, po);
             result.figures.insert(result.figures.end(), f.begin(), f.end());
+            const std::vector<std::string> t = plot_training_curves(
+                {result.run_dir + "/tables/training_" + r.label + ".csv", po.figures_dir + "/" + r.label, r.label,
+                 po.log_path});
+            result.figures.insert(result.figures.end(), t.begin(), t.end());
         }
         log_info("[plots] %zu figures in %s", result.figures.size(), po.figures_dir.c_str());
     }

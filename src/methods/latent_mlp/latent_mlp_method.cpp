@@ -136,6 +136,9 @@ public:
         net.save(out, "integrator.");
         out.set_attribute("/", "epochs_run", (long long)s.epochs_run);
         out.set_attribute("/", "final_loss", s.final_loss);
+        nn::TrainingCurve curve = s.curve;
+        curve.stage = "integrator";
+        nn::save_training_curves(out, "", {curve});
         out.set_attribute("/", "train_seconds", s.seconds);
         out.set_attribute("/", "resumed", (long long)s.resumed);
         // The training budget and how the run ended (the tables state them).

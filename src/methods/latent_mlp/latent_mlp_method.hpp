@@ -6,7 +6,8 @@
 // and the training keys of README "Experiment files" (hidden, epochs, batch,
 // learning_rate, noise_fraction, balancing_floor, penalty_weight, seed, max_seconds).
 // Artefact: the network under "integrator." (LatentMlpModel::save) plus epochs_run,
-// final_loss and train_seconds attributes.
+// final_loss and train_seconds attributes, and the loss per epoch (training_curve/integrator,
+// nn/training_curve.hpp; its last value is final_loss).
 #include "methods/method.hpp"
 
 namespace lb {
