@@ -326,7 +326,8 @@ PYBIND11_MODULE(_latentbench, m)
                 return std::make_unique<Autoencoder>(Autoencoder::load(path, physics.spec()));
             },
             py::arg("path"), py::arg("physics"))
-        .def("save", &Autoencoder::save, py::arg("path"))
+        .def(
+            "save", [](Autoencoder& ae, const std::string& path) { ae.save(path); }, py::arg("path"))
         .def_property_readonly("latent_dim", &Autoencoder::latent_dim)
         .def_property_readonly("num_features", &Autoencoder::num_features)
         .def_property_readonly("scene_name", &Autoencoder::scene_name)

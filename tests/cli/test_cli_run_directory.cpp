@@ -62,7 +62,7 @@ TEST(CliRunDirectory, OutputThatIsAFile)
     const std::string file = dir + "/file";
     write_file(file, "not a directory\n");
     const std::string suite = dir + "/suite.toml";
-    for (const std::string& command : {"run", "run --check", "plan", "submit", "submit --dry-run"}) {
+    for (const std::string command : {"run", "run --check", "plan", "submit", "submit --dry-run"}) {
         expect_refused(command + " " + suite + " -o " + file, {"-o '" + file + "'", "is an existing file", "not a directory"},
                        file);
         // A run directory below the file names the file it would be inside.
@@ -85,7 +85,7 @@ TEST(CliRunDirectory, OutputDirKeyThatIsAFile)
     const std::string file = dir + "/file";
     write_file(file, "not a directory\n");
     write_file(dir + "/suite.toml", suite_text(file));
-    for (const std::string& command : {"run", "plan", "submit --dry-run"})
+    for (const std::string command : {"run", "plan", "submit --dry-run"})
         expect_refused(command + " " + dir + "/suite.toml", {"suite.toml", "key 'output_dir'", file}, file);
 }
 
