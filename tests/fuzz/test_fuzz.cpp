@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "io/hdf5.hpp"
+#include "nn/checkpoint.hpp"
 #include "lb_paths.hpp"
 #include "support/cli_runner.hpp"
 #include "support/tiny_scene.hpp"
@@ -110,6 +111,14 @@ void rewind_checkpoint(const std::string& path)
     f.set_attribute("/", "epoch", 1LL);
     f.set_attribute("/", "best_epoch", std::min(1LL, f.attribute_int("/", "best_epoch")));
     f.set_attribute("/", "epochs_since_improvement", std::min(1LL, f.attribute_int("/", "epochs_since_improvement")));
+    // The loss curve (nn/training_curve.hpp) as the killed run had it: its first epoch,
+    // ending at the last loss, or the loader sets the checkpoint aside as inconsistent.
+    for (const char* name : {"curve/train_loss", "curve/validation_loss"}) {
+        if (!f.exists(name)) continue;
+        const VectorXd first = f.read_vector(name).head(1);
+        f.write(name, first);
+        if (std::string(name) == "curve/train_loss") f.set_attribute("/", "last_loss", nn::exact_text(first(0)));
+    }
 }
 
 /// The tiny scene simulated, an autoencoder, a latent MLP and a linear PCA fit, a
