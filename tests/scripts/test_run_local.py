@@ -17,7 +17,7 @@ import unittest
 REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 RUN_LOCAL = REPO / "scripts" / "run_local.py"
 COMPARE = REPO / "scripts" / "compare_tables.py"
-SUITE = REPO / "tests" / "slurm" / "slurm_suite.toml"  # 8 units in 3 levels, seconds each
+SUITE = REPO / "tests" / "slurm" / "slurm_suite.toml"  # 10 units in 3 levels (ours_long: the requeue test's fit, ~10 s)
 ARGS = None
 
 
@@ -41,18 +41,18 @@ class RunLocal(unittest.TestCase):
         out = run(["/usr/bin/python3", RUN_LOCAL, SUITE, "-o", parallel, "--workers", "2",
                    "--cli", ARGS.cli]).stdout
         self.assertIn("done   scene.cantilever_small", out)
-        self.assertEqual(out.count("done   "), 8, out)
+        self.assertEqual(out.count("done   "), 10, out)
         self.assertTrue((parallel / ".bin" / "latentbench").is_file())
         run([ARGS.cli, "-q", "-j", "1", "run", SUITE, "-o", serial])
         run(["/usr/bin/python3", COMPARE, parallel / "tables", serial / "tables"])
         # Every unit's status file says done; a second run finds them all cached.
         statuses = sorted((parallel / "units").glob("*.status"))
-        self.assertEqual(len(statuses), 8)
+        self.assertEqual(len(statuses), 10)
         for status in statuses:
             self.assertTrue(status.read_text().startswith("done"), status)
         again = run(["/usr/bin/python3", RUN_LOCAL, SUITE, "-o", parallel, "--workers", "2",
                      "--cli", ARGS.cli, "--no-merge"]).stdout
-        self.assertIn("all 8 units done", again)
+        self.assertIn("all 10 units done", again)
 
     def test_bad_arguments_exit_1_naming_the_problem(self):
         p = run(["/usr/bin/python3", RUN_LOCAL, self.tmp / "missing.toml", "--cli", ARGS.cli], expect=1)
@@ -77,7 +77,7 @@ class RunLocal(unittest.TestCase):
         self.assertIn("FAILED scene.cantilever_small (exit 1 ", p.stdout)
         self.assertIn("latentbench: error: ", p.stdout)
         self.assertIn(str(run_dir / "cantilever_small"), p.stdout)
-        self.assertIn("1 unit(s) failed: scene.cantilever_small; 7 not started", p.stderr)
+        self.assertIn("1 unit(s) failed: scene.cantilever_small; 9 not started", p.stderr)
         self.assertFalse((run_dir / "tables").exists())
 
 
