@@ -261,6 +261,10 @@ Suite scan(const std::string& dir)
                 std::set<double>& seeds = f.seeds[row[size_t(method)].text + '\x1f' + (point >= 0 ? row[size_t(point)].text : "")];
                 if (row[size_t(seed)].value && std::isfinite(*row[size_t(seed)].value)) seeds.insert(*row[size_t(seed)].value);
             }
+        } else if (has("training_", l) || has("observations_", l)) {
+            // Tidy data beside the tables (the training curves are shown as figures; an
+            // older observations_ file duplicates rollouts_): not a table to show.
+            continue;
         } else if (stem.rfind("ablation_", 0) == 0 && !suffix_label(stem, labels).empty()) {
             scene(suffix_label(stem, labels)).ablations.push_back(load(stem));
         } else if (stem == "table1_timings" || stem == "table2_jvp") {
@@ -378,7 +382,8 @@ std::string table_html(const Suite& s, const LoadedTable& t, const std::string& 
         return it == table.columns.end() ? -1 : int(it - table.columns.begin());
     };
     const int method_col = column("method"), point_col = column("sweep point");
-    const bool with_seeds = seeds && seeds->seeds_known && method_col >= 0;
+    // Today's methods tables count their seeds themselves (a 'seeds' column): no second one.
+    const bool with_seeds = seeds && seeds->seeds_known && method_col >= 0 && column("seeds") < 0;
     std::ostringstream o;
     o << "<div class=\"table-block\">\n<h4>" << esc(table.title) << "</h4>\n";
     if (!table.caption.empty())
