@@ -435,7 +435,43 @@ def render_report(root):
         raise ReportError(f"no source {src}")
     with open(src, encoding="utf-8") as fh:
         source = fh.read()
-    return REPORT_HEADER + "".join(s[2] for s in segments(source, root))
+    return link_pages(REPORT_HEADER + "".join(s[2] for s in segments(source, root)), root)
+
+
+TABLE_SPAN = re.compile(r"`results/([a-z0-9_]+)/tables/([a-z0-9_]+)\.md`")
+
+
+def page_anchor(root, suite, stem):
+    """The id of the section of results/SUITE/index.html that shows table STEM (the page's
+    own ids: methods-, diagnose-, deviations-, embedding-, ablations-<scene>, paper-tables),
+    or None if the page has no such section."""
+    page = os.path.join(root, "results", suite, "index.html")
+    if not os.path.isfile(page):
+        return None
+    with open(page, encoding="utf-8") as fh:
+        ids = set(re.findall(r'id="([^"]+)"', fh.read()))
+    candidates = []
+    if stem in ("table1_timings", "table2_jvp"):
+        candidates.append("paper-tables")
+    for kind in ("methods", "diagnose", "deviations", "embedding"):
+        if stem.startswith(kind + "_"):
+            candidates.append(kind + "-" + stem[len(kind) + 1:])
+    if stem.startswith("ablation_"):
+        # ablation_<name>_<scene>: the scene is the longest tail the page has a section for.
+        parts = stem.split("_")
+        candidates += ["ablations-" + "_".join(parts[k:]) for k in range(2, len(parts))]
+    return next((c for c in candidates if c in ids), None)
+
+
+def link_pages(text, root):
+    """After each `results/SUITE/tables/STEM.md` a link to the section of the suite's web page
+    that shows it (results/SUITE/index.html), where the page has that section."""
+    def link(m):
+        anchor = page_anchor(root, m.group(1), m.group(2))
+        if anchor is None:
+            return m.group(0)
+        return f"{m.group(0)} ([page](../results/{m.group(1)}/index.html#{anchor}))"
+    return TABLE_SPAN.sub(link, text)
 
 
 # ---------------------------------------------------------------------------------------------
