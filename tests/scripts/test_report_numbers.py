@@ -220,14 +220,14 @@ class ReportNumbers(unittest.TestCase):
 
 
 class StaleTable(unittest.TestCase):
-    """On a copy of results/ (the Markdown tables and benchmark files) and paper/: editing a cell
+    """On a copy of results/ (the Markdown tables, benchmark files and pages) and paper/: editing a cell
     that the report references makes the check fail; regenerating makes it pass."""
 
     def test_changed_cell_fails_then_regeneration_passes(self):
         with tempfile.TemporaryDirectory(dir=ARGS.tmp) as tmp:
             root = pathlib.Path(tmp)
             for path in (REPO / "results").rglob("*"):
-                if path.suffix in (".md", ".json") and path.is_file():
+                if path.suffix in (".md", ".json", ".html") and path.is_file():  # pages: the links
                     dst = root / path.relative_to(REPO)
                     dst.parent.mkdir(parents=True, exist_ok=True)
                     shutil.copy2(path, dst)
