@@ -1,12 +1,31 @@
 #include "io/json.hpp"
 
 #include <cctype>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 
 #include "core/error.hpp"
 
 namespace lb {
+
+std::string json_quote(const std::string& text)
+{
+    std::string out = "\"";
+    for (const unsigned char c : text) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += char(c);
+        } else if (c < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            out += buf;
+        } else {
+            out += char(c);
+        }
+    }
+    return out + "\"";
+}
 
 const JsonValue& JsonValue::at(const std::string& key) const
 {

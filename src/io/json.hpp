@@ -28,6 +28,10 @@ struct JsonValue {
     const std::string& string() const;
 };
 
+/// `text` as a JSON string literal, quotes included: '"' and '\\' escaped, control
+/// characters as \u00XX (what parse_json reads back).
+std::string json_quote(const std::string& text);
+
 /// Parse `text`; IoError "<what>: malformed JSON (...) at offset N" on a syntax error, a
 /// document longer than `max_bytes` or nested deeper than `max_depth`. Strings take the
 /// escapes \n \t \r \b \f \" \\ \/ and \u00XX (ASCII).

@@ -31,16 +31,6 @@ namespace {
 
 constexpr const char* kGit = "/usr/bin/git";
 
-std::string utc_date()
-{
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char text[32];
-    std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &tm);
-    return text;
-}
-
 /// Text for HTML content and attribute values: & < > " ' escaped.
 std::string esc(const std::string& s)
 {
@@ -607,7 +597,7 @@ std::string page_html(const Suite& s)
         for (const std::string& v : s.other_videos) o << video_html(v);
         o << "</section>\n";
     }
-    o << "<footer><p class=\"files\">Page written by latentbench on " << esc(utc_date()) << ".</p></footer>\n";
+    o << "<footer><p class=\"files\">Page written by latentbench on " << esc(utc_now()) << ".</p></footer>\n";
     o << "<script>" << kScript << "</script>\n</body>\n</html>\n";
     return o.str();
 }
@@ -644,7 +634,7 @@ std::string write_suite_listing(const std::vector<std::string>& suite_dirs, cons
       << "<p>One page per suite: its tables, figures, videos and provenance. Click a column header to sort.</p>\n"
       << "<div class=\"scroll\"><table class=\"sortable\" id=\"suites\"><thead><tr><th>suite</th><th>description</th>"
          "<th>scenes</th><th>folder</th></tr></thead>\n<tbody>\n"
-      << rows.str() << "</tbody></table></div>\n<footer><p class=\"files\">Written by latentbench on " << esc(utc_date())
+      << rows.str() << "</tbody></table></div>\n<footer><p class=\"files\">Written by latentbench on " << esc(utc_now())
       << ".</p></footer>\n<script>" << kScript << "</script>\n</body>\n</html>\n";
     write_text_atomically(path, o.str());
     return path;

@@ -11,6 +11,7 @@
 #include "core/hash.hpp"
 #include "core/parse.hpp"
 #include "eval/rollout.hpp"
+#include "io/json.hpp"
 #include "methods/full_space/full_space_method.hpp"
 #include "paper/paper_recipe.hpp"
 #include "paper/scene_defaults.hpp"
@@ -316,28 +317,10 @@ private:
     std::map<std::string, std::string> m_planned;  ///< dedupe key -> eval unit id
 };
 
-std::string json_string(const std::string& text)
-{
-    std::string out = "\"";
-    for (const unsigned char c : text) {
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += char(c);
-        } else if (c < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += char(c);
-        }
-    }
-    return out + "\"";
-}
-
 std::string json_strings(const std::vector<std::string>& items)
 {
     std::string out = "[";
-    for (size_t i = 0; i < items.size(); ++i) out += (i ? "," : "") + json_string(items[i]);
+    for (size_t i = 0; i < items.size(); ++i) out += (i ? "," : "") + json_quote(items[i]);
     return out + "]";
 }
 
@@ -372,19 +355,19 @@ std::string manifest_jsonl(const ExperimentConfig& ex, const ExperimentPlan& pla
     std::ostringstream out;
     for (size_t i = 0; i < plan.units.size(); ++i) {
         const Unit& u = plan.units[i];
-        out << "{\"index\":" << i << ",\"id\":" << json_string(u.id) << ",\"kind\":\"" << unit_kind_name(u.kind)
+        out << "{\"index\":" << i << ",\"id\":" << json_quote(u.id) << ",\"kind\":\"" << unit_kind_name(u.kind)
             << "\",\"level\":" << u.level << ",\"array_index\":" << u.array_index
-            << ",\"scene\":" << json_string(u.scene)
-            << ",\"method\":" << (u.method.empty() ? "null" : json_string(u.method))
+            << ",\"scene\":" << json_quote(u.scene)
+            << ",\"method\":" << (u.method.empty() ? "null" : json_quote(u.method))
             << ",\"seed\":" << (u.seed ? std::to_string(*u.seed) : "null")
-            << ",\"point\":" << (u.point.empty() ? "null" : json_string(u.point)) << ",\"sweep\":";
+            << ",\"point\":" << (u.point.empty() ? "null" : json_quote(u.point)) << ",\"sweep\":";
         if (u.point.empty()) {
             out << "null";
         } else {
             out << "{";
             for (size_t a = 0; a < ex.sweep.size(); ++a)
-                out << (a ? "," : "") << json_string(ex.sweep[a].key) << ":"
-                    << json_string(points[u.point_index]->point_values[a]);
+                out << (a ? "," : "") << json_quote(ex.sweep[a].key) << ":"
+                    << json_quote(points[u.point_index]->point_values[a]);
             out << "}";
         }
         std::vector<std::string> files;

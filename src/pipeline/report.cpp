@@ -15,6 +15,7 @@
 #include "core/parallel.hpp"
 #include "eval/summary_schema.hpp"
 #include "io/atomic_file.hpp"
+#include "io/json.hpp"
 #include "io/table.hpp"
 #include "io/table_data.hpp"
 #include "paper/paper_numbers.hpp"
@@ -450,24 +451,6 @@ std::vector<std::pair<std::string, int>> fit_versions(const std::vector<SceneRes
     return out;
 }
 
-std::string json_string(const std::string& text)
-{
-    std::string out = "\"";
-    for (const char c : text) {
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += c;
-        } else if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
-
 /// The suite file as provenance names it: relative to the working directory when it is
 /// inside it (no absolute path of this machine in a published folder), else its file name.
 std::string suite_file_name(const std::string& source)
@@ -496,26 +479,26 @@ void write_provenance(const ExperimentConfig& ex, const std::vector<SceneResult>
 {
     std::string versions;
     for (const auto& [name, version] : fit_versions(scenes))
-        versions += std::string(versions.empty() ? "" : ", ") + json_string(name) + ": " + std::to_string(version);
+        versions += std::string(versions.empty() ? "" : ", ") + json_quote(name) + ": " + std::to_string(version);
     std::string seeds;
     for (const std::uint64_t s : ex.seeds) seeds += (seeds.empty() ? "" : ", ") + std::to_string(s);
     std::string command;
-    for (const std::string& a : command_line()) command += (command.empty() ? "" : ", ") + json_string(a);
+    for (const std::string& a : command_line()) command += (command.empty() ? "" : ", ") + json_quote(a);
     const std::string text =
         "{\n"
         "  \"format\": \"latentbench.provenance/1\",\n"
-        "  \"suite\": " + json_string(ex.name) + ",\n"
-        "  \"suite_file\": " + json_string(suite_file_name(ex.source)) + ",\n"
-        "  \"suite_hash\": " + json_string(suite_file_hash(ex.source)) + ",\n"
-        "  \"commit\": " + json_string(build_commit()) + ",\n"
+        "  \"suite\": " + json_quote(ex.name) + ",\n"
+        "  \"suite_file\": " + json_quote(suite_file_name(ex.source)) + ",\n"
+        "  \"suite_hash\": " + json_quote(suite_file_hash(ex.source)) + ",\n"
+        "  \"commit\": " + json_quote(build_commit()) + ",\n"
         "  \"dirty\": " + (build_dirty() ? "true" : "false") + ",\n"
-        "  \"build\": " + json_string(LB_BUILD_TYPE) + ",\n"
+        "  \"build\": " + json_quote(LB_BUILD_TYPE) + ",\n"
         "  \"seeds\": [" + seeds + "],\n"
         "  \"threads\": " + std::to_string(ex.threads > 0 ? ex.threads : num_threads()) + ",\n"
         "  \"fit_versions\": {" + versions + "},\n"
         "  \"command\": [" + command + "],\n"
-        "  \"machine\": " + json_string(machine_description()) + ",\n"
-        "  \"date\": " + json_string(utc_now()) + "\n"
+        "  \"machine\": " + json_quote(machine_description()) + ",\n"
+        "  \"date\": " + json_quote(utc_now()) + "\n"
         "}\n";
     write_text_atomically(run_dir + "/provenance.json", text);
 }
