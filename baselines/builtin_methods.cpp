@@ -2,6 +2,7 @@
 
 #include "baselines/fulton_cubature/fulton_method.hpp"
 #include "baselines/linear_pca/linear_pca_method.hpp"
+#include "baselines/python_method/python_method.hpp"
 #include "baselines/tan_physics_mlp/tan_method.hpp"
 
 namespace lb {
@@ -15,6 +16,7 @@ const MethodRegistry& builtin_methods()
         r.add(fulton_cubature_method());
         r.add(fulton_full_method());
         r.add(tan_physics_mlp_method());
+        r.add(python_method());
         return r;
     }();
     return registry;

@@ -68,6 +68,7 @@ MethodInputs command_line_inputs(const Dataset& data, const PhysicsModel& model,
         if (ae_path.empty())
             throw ConfigError(what + ": --ae is required for method '" + method.method_name() + "'");
         in.autoencoder = loaded ? std::move(loaded) : std::make_shared<Autoencoder>(Autoencoder::load(ae_path, data.physics));
+        in.autoencoder_path = ae_path;
     }
     // The reference simulator uses the scene's own Newton settings, stored in the dataset.
     if (!method.has_artefact()) in.newton = load_scene_from_string(data.scene_toml, "dataset scene", ".").newton;
@@ -113,6 +114,7 @@ void register_fit(CLI::App& app)
         const PhysicsModel model(data.physics);
         MethodInputs in = command_line_inputs(data, model, *method, a->ae, "fit");
         in.checkpoint_path = a->checkpoint;
+        in.dataset_path = a->data;
         method->resolve({data.scene_name, scene_latent(in, data)});
         try {
             fit_artefact(*method, in, data.scene_name, a->output, method->options_text());

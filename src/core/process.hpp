@@ -23,3 +23,37 @@ inline constexpr int kProcessTimedOut = -2;
 int run_process(const std::vector<std::string>& argv, const ProcessOptions& options = {});
 
 } // namespace lb
+
+namespace lb {
+
+/// A program started with pipes on its standard input and output, for a request and
+/// reply protocol (the Python method host, baselines/python_method/). No shell; stderr is
+/// inherited. The destructor closes its input and waits for it (killing it after
+/// `exit_grace_seconds`).
+class ChildProcess {
+public:
+    /// @param argv  argv[0] an absolute path
+    /// @param extra_env  "NAME=value" entries placed before this process's environment
+    /// @throws Error if it cannot be started
+    ChildProcess(const std::vector<std::string>& argv, const std::vector<std::string>& extra_env);
+    ~ChildProcess();
+    ChildProcess(const ChildProcess&) = delete;
+    ChildProcess& operator=(const ChildProcess&) = delete;
+
+    /// Write all of `size` bytes; false if the program closed its input (it exited).
+    bool write_all(const void* data, size_t size);
+    /// Read exactly `size` bytes; false on end of file (the program exited).
+    bool read_exact(void* data, size_t size);
+    /// Close the input and wait for the program: its exit status (128 + signal if killed).
+    int finish(double exit_grace_seconds = 5.0);
+    const std::string& program() const { return m_program; }
+
+private:
+    std::string m_program;
+    int m_pid = -1;
+    int m_in = -1;   ///< our end of the program's stdin
+    int m_out = -1;  ///< our end of the program's stdout
+    int m_status = -1;
+};
+
+} // namespace lb

@@ -50,6 +50,10 @@ struct MethodInputs {
     bool progress = false;
     /// The scene's Newton settings (the ground truth was simulated with them).
     NewtonOptions newton;
+    /// The files the dataset and autoencoder were read from ("" if they were built in
+    /// memory), for methods that run in another process (method = "python").
+    std::string dataset_path;
+    std::string autoencoder_path;
 };
 
 /// Scene facts a method may take defaults from (step 2 above).
@@ -83,6 +87,10 @@ public:
     virtual bool has_artefact() const { return true; }
     /// True for the paper's own method: it supplies the rows of Tables 1 and 2.
     virtual bool is_paper_method() const { return false; }
+    /// True for a method that runs user code (method = "python"): an Error in its fit or
+    /// rollout fails its own units only; the suite's other methods still finish, and the
+    /// tables leave its row out with a note saying why (the run then exits 1).
+    virtual bool failures_contained() const { return false; }
     /// Set the seed of a learned method's training (random initialisation, shuffles,
     /// noise) before fit; part of options_text(). Returns false, changing nothing, for a
     /// method whose fit does not depend on a seed (it is then fitted once for a suite's

@@ -137,6 +137,9 @@ struct RunResult {
     int stages_run = 0;
     int stages_cached = 0;
     double seconds = 0.0;
+    /// Units of methods with contained failures (method = "python") that failed, "id: why";
+    /// run and merge write the other rows' tables, then throw an Error naming these.
+    std::vector<std::string> failed_units;
 };
 
 /// The local run: every work unit of the suite in order (pipeline/plan.hpp), then the

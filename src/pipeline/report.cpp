@@ -213,6 +213,7 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
         }
     }
     t.add_note("training horizon: " + std::to_string(r.train_frames) + " frames per sequence");
+    for (const std::string& f : r.failed_rows) t.add_note("FAILED, no row: " + f);
     t.add_provenance(timing_threads_text(shown));
     if (csv) csv->notes = t.notes;
     return t;

@@ -69,6 +69,9 @@ struct SceneResult {
     nn::TrainingCurves autoencoder_curves;
     std::uint64_t autoencoder_seed = 0;
     std::vector<MethodResult> methods;
+    /// Rows left out because a unit of a method with contained failures (method = "python")
+    /// failed: "name: why", one per row; the methods table names them in a note.
+    std::vector<std::string> failed_rows;
 };
 
 /// The tidy table of one scene (DESIGN rule: one row per observation): one row per method,

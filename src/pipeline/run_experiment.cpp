@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
@@ -165,8 +166,18 @@ public:
         }
     }
 
-    /// The tables' facts of one scene (its first scene unit) and every row of it.
-    SceneResult scene_result(size_t s)
+    /// True for a fit or eval unit of a method whose failures are contained (user code).
+    bool contained(const Unit& u)
+    {
+        if (u.kind == UnitKind::Scene) return false;
+        const Unit* su = m_plan.find(u.scene_unit);
+        if (!su || !unit_complete(*su)) return false;
+        return method_of(u, loaded(u.scene_unit)).failures_contained();
+    }
+
+    /// The tables' facts of one scene (its first scene unit) and every row of it but those
+    /// with a unit in `failed` (id → why), which are named in r.failed_rows instead.
+    SceneResult scene_result(size_t s, const std::map<std::string, std::string>& failed = {})
     {
         const Unit& su = *m_plan.find(m_plan.scene_units[s]);
         LoadedScene& ls = loaded(su.id);
@@ -188,7 +199,17 @@ public:
         r.autoencoder_curves = nn::load_training_curves(h5::File::open(su.outputs[1].file), "");
         r.autoencoder_seed = ls.ae->seed();
         for (const PlannedRow& row : m_plan.rows) {
-            if (row.scene_index == s) r.methods.push_back(method_result(row));
+            if (row.scene_index != s) continue;
+            std::string why;
+            for (const std::string& id : row.eval_units) {
+                const Unit& eu = *m_plan.find(id);
+                for (const std::string& unit_id : {eu.fit_unit, id}) {
+                    const auto f = failed.find(unit_id);
+                    if (why.empty() && !unit_id.empty() && f != failed.end()) why = unit_id + " " + f->second;
+                }
+            }
+            if (why.empty()) r.methods.push_back(method_result(row));
+            else r.failed_rows.push_back(row.name + ": " + why);
         }
         return r;
     }
@@ -321,6 +342,9 @@ private:
         in.resume = !m_cache.forced("integrators");
         in.progress = log_level() >= LogLevel::Info;
         in.newton = ls.scene.newton;
+        const Unit& su = *m_plan.find(u.scene_unit);
+        in.dataset_path = su.outputs[0].file;
+        if (in.autoencoder) in.autoencoder_path = su.outputs[1].file;
         return in;
     }
 
@@ -460,8 +484,18 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
                    RunResult& result)
 {
     std::vector<std::string> problems;
+    result.failed_units.clear();
+    std::map<std::string, std::string> failed;  // contained failures: their rows are left out
     for (const Unit& u : plan.units) {
-        if (!unit_complete(u)) problems.push_back("  " + u.id + ": " + unit_problem(plan, u));
+        if (unit_complete(u)) continue;
+        const std::string why = unit_problem(plan, u);
+        if (why.rfind("failed on ", 0) == 0 && runner.contained(u)) {
+            // The tables name the log relative to the run directory (no absolute paths).
+            const size_t log_at = why.rfind(" (log: ");
+            failed[u.id] = why.substr(0, log_at) + " (log: units/" + u.id + ".log)";
+            result.failed_units.push_back(u.id + ": " + why);
+        }
+        else problems.push_back("  " + u.id + ": " + why);
     }
     if (!problems.empty()) {
         std::string message = std::to_string(problems.size()) + " of " + std::to_string(plan.units.size()) +
@@ -472,7 +506,7 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
         throw Error(message);
     }
     std::vector<SceneResult> scenes;
-    for (size_t s = 0; s < ex.scenes.size(); ++s) scenes.push_back(runner.scene_result(s));
+    for (size_t s = 0; s < ex.scenes.size(); ++s) scenes.push_back(runner.scene_result(s, failed));
 
     result.tables = write_tables(ex, scenes, result.run_dir + "/tables");
     write_provenance(ex, scenes, result.run_dir);
@@ -516,6 +550,19 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
     log_info("[page] %s", write_suite_page(result.run_dir).c_str());
 }
 
+/// After the tables are written: exit 1 naming every failed unit of a method with contained
+/// failures (their rows are left out of the tables, each named in a note).
+void throw_if_units_failed(const ExperimentConfig& ex, const RunResult& result)
+{
+    if (result.failed_units.empty()) return;
+    std::string message = std::to_string(result.failed_units.size()) + " work unit(s) of " + ex.source +
+                          " failed; the other methods finished and their tables are in " + result.run_dir +
+                          "/tables (the failed rows are left out, each named in a note):\n";
+    for (const std::string& f : result.failed_units) message += "  " + f + "\n";
+    message.pop_back();
+    throw Error(message);
+}
+
 /// What every entry point does first: the run directory, its log, the plan.
 struct Session {
     Timer total;
@@ -554,13 +601,31 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
     write_text_atomically(session.result.run_dir + "/experiment.toml", ex.toml_text);
     UnitRunner runner(ex, session.plan, session.cache);
     try {
-        for (const Unit& u : session.plan.units) runner.run(u);
+        std::set<std::string> failed;  // units of methods with contained failures (user code)
+        for (const Unit& u : session.plan.units) {
+            const auto dep = std::find_if(u.depends_on.begin(), u.depends_on.end(),
+                                          [&](const std::string& d) { return failed.count(d) > 0; });
+            if (dep != u.depends_on.end()) {
+                write_status(session.result.run_dir, u.id, "failed", "not run: unit '" + *dep + "' failed");
+                failed.insert(u.id);
+                continue;
+            }
+            try {
+                runner.run(u);
+            } catch (const Error& e) {
+                if (!runner.contained(u)) throw;
+                log_warn("unit '%s' failed (the suite's other methods go on): %s", u.id.c_str(), e.what());
+                failed.insert(u.id);
+            }
+        }
         merge_outputs(ex, session.plan, runner, session.cache, session.result);
     } catch (...) {
         set_log_file("");
         throw;
     }
-    return session.finish(ex, "experiment");
+    RunResult result = session.finish(ex, "experiment");
+    throw_if_units_failed(ex, result);
+    return result;
 }
 
 RunResult run_unit(const ExperimentConfig& ex, const std::string& id, const RunOptions& options)
@@ -595,7 +660,9 @@ RunResult merge_units(const ExperimentConfig& ex, const RunOptions& options)
         set_log_file("");
         throw;
     }
-    return session.finish(ex, "merge of");
+    RunResult result = session.finish(ex, "merge of");
+    throw_if_units_failed(ex, result);
+    return result;
 }
 
 } // namespace lb
