@@ -218,7 +218,9 @@ public:
     /// stage: the autoencoder's rows, then per table row (first seed) its one step from
     /// the truth (fulton_full: the manifold-optimal step) and its rollout. The key covers
     /// the dataset, the autoencoder, every rollout (and so every artefact) and the stride.
-    std::vector<std::string> diagnose_scene(size_t s, const std::string& tables_dir)
+    /// Rows with a unit in `failed` (contained failures) are left out, as in the tables.
+    std::vector<std::string> diagnose_scene(size_t s, const std::string& tables_dir,
+                                            const std::map<std::string, std::string>& failed = {})
     {
         const Unit& su = *m_plan.find(m_plan.scene_units[s]);
         std::vector<const PlannedRow*> rows;
@@ -226,6 +228,10 @@ public:
                           su.outputs[1].key;
         for (const PlannedRow& row : m_plan.rows) {
             if (row.scene_index != s) continue;
+            const bool row_failed = std::any_of(row.eval_units.begin(), row.eval_units.end(), [&](const std::string& id) {
+                return failed.count(id) > 0 || failed.count(m_plan.find(id)->fit_unit) > 0;
+            });
+            if (row_failed) continue;
             rows.push_back(&row);
             key += "|" + row.name + "=" + m_plan.find(row.eval_units.front())->outputs[0].key;
         }
@@ -513,7 +519,7 @@ void merge_outputs(const ExperimentConfig& ex, const ExperimentPlan& plan, UnitR
     log_info("[tables] %zu tables in %s/tables", result.tables.size(), result.run_dir.c_str());
     if (ex.diagnose) {
         for (size_t s = 0; s < ex.scenes.size(); ++s) {
-            for (const std::string& p : runner.diagnose_scene(s, result.run_dir + "/tables")) result.tables.push_back(p);
+            for (const std::string& p : runner.diagnose_scene(s, result.run_dir + "/tables", failed)) result.tables.push_back(p);
         }
     }
     if (ex.plots) {

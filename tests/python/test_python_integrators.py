@@ -112,6 +112,7 @@ variant = "small"
 sequences = "test"
 [outputs]
 plots = false
+diagnose = true
 """
 
 
@@ -136,4 +137,7 @@ def test_suite_keeps_the_python_row_and_contains_the_failures(tmp_path):
     assert "(log: units/eval.cloth_small.raises.log)" in md
     tidy = (tables / "rollouts_cloth_small.csv").read_text()
     assert "linear_map" in tidy and "raises" not in tidy
+    # The error decomposition covers the Python row too, and leaves the failed ones out.
+    diagnose = (tables / "diagnose_cloth_small.md").read_text()
+    assert "| linear_map" in diagnose and "| ours" in diagnose and "raises" not in diagnose
     assert (tmp_path / "run" / "index.html").exists()
