@@ -136,6 +136,12 @@ public:
     {
         for (const std::string& dep : u.depends_on) {
             const Unit* d = m_plan.find(dep);
+            if (d && !unit_complete(*d) && contained(*d) && status_of(*d) == "failed") {
+                // A Python method's failed fit: this unit fails too, recorded, so that the merge
+                // leaves the row out instead of waiting for it (a Slurm array runs it anyway).
+                write_status(m_plan.run_dir, u.id, "failed", "not run: unit '" + dep + "' failed");
+                throw Error("unit '" + u.id + "' not run: unit '" + dep + "' failed");
+            }
             if (!d || !unit_complete(*d))
                 throw Error("unit '" + u.id + "' needs unit '" + dep + "', which has not completed (run `latentbench run " +
                             m_ex.source + " --unit " + dep + "` first)");
@@ -164,6 +170,15 @@ public:
         } catch (const Error& e) {
             throw Error("unit '" + u.id + "' completed, but its status could not be written: " + e.what());
         }
+    }
+
+    /// The first line of a unit's status file ("" if none).
+    std::string status_of(const Unit& u) const
+    {
+        std::ifstream in(status_path(m_plan.run_dir, u.id));
+        std::string status;
+        std::getline(in, status);
+        return status;
     }
 
     /// True for a fit or eval unit of a method whose failures are contained (user code).

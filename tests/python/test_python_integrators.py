@@ -141,3 +141,23 @@ def test_suite_keeps_the_python_row_and_contains_the_failures(tmp_path):
     diagnose = (tables / "diagnose_cloth_small.md").read_text()
     assert "| linear_map" in diagnose and "| ours" in diagnose and "raises" not in diagnose
     assert (tmp_path / "run" / "index.html").exists()
+
+
+def test_work_units_then_merge_contain_the_failures_as_a_slurm_array_does(tmp_path):
+    """Every unit run on its own (`run --unit ID`, what each Slurm array task runs), then
+    `run --merge`: the Python rows that failed are left out, the others merged."""
+    import json
+    suite = tmp_path / "suite.toml"
+    suite.write_text(SUITE.format(example=EXAMPLE, here=HERE, cloth=REPO / "experiments/scenes/cloth.toml"))
+    run_dir = tmp_path / "run"
+    run_cli("-q", "plan", suite, "-o", run_dir)
+    statuses = {}
+    for line in (run_dir / "manifest.jsonl").read_text().splitlines():
+        unit = json.loads(line)["id"]
+        statuses[unit] = run_cli("-q", "-j", "1", "run", suite, "-o", run_dir, "--unit", unit, check=False)[0]
+    assert {u for u, s in statuses.items() if s != 0} == {
+        "fit.cloth_small.bad_fit", "eval.cloth_small.bad_fit", "eval.cloth_small.raises"}, statuses
+    status, _, err = run_cli("-q", "run", suite, "-o", run_dir, "--merge", check=False)
+    assert status == 1 and "3 work unit(s)" in err, err
+    md = (run_dir / "tables" / "methods_cloth_small.md").read_text()
+    assert "| linear_map" in md and "FAILED, no row: bad_fit" in md and "FAILED, no row: raises" in md
