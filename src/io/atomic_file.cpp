@@ -126,4 +126,18 @@ void write_text_atomically(const std::string& path, const std::string& text)
     out.commit();
 }
 
+void copy_file_atomically(const std::string& from, const std::string& to)
+{
+    const fs::path parent = fs::path(to).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) {
+        fs::create_directories(parent, ec);
+        if (ec) throw IoError("cannot create '" + to + "': " + create_failure_reason(to));
+    }
+    AtomicOutput out(to);
+    fs::copy_file(from, out.temp_path(), fs::copy_options::overwrite_existing, ec);
+    if (ec) throw IoError("cannot copy '" + from + "' to '" + to + "': " + ec.message());
+    out.commit();
+}
+
 } // namespace lb

@@ -44,4 +44,8 @@ void check_output_path(const std::string& path, const std::string& what);
 /// missing directory, a parent that is a file).
 void write_text_atomically(const std::string& path, const std::string& text);
 
+/// Copy `from` to `to` atomically (a temporary renamed onto `to`), creating the parent
+/// directory; IoError naming both files on failure, `to` untouched.
+void copy_file_atomically(const std::string& from, const std::string& to);
+
 } // namespace lb

@@ -33,6 +33,10 @@ struct MethodSpec {
     std::vector<std::uint64_t> seeds;
 };
 
+/// What the suite's seeds vary (ExperimentConfig::seed_scope).
+enum class SeedScope { integrator, autoencoder };
+const char* seed_scope_name(SeedScope scope);
+
 struct SceneSpec {
     std::string scene_path;  ///< resolved
     std::string variant;
@@ -75,6 +79,11 @@ struct ExperimentConfig {
     /// fitted and rolled out once per seed, and the tables give statistics over the
     /// seeds. Empty: once, with the method's own seed.
     std::vector<std::uint64_t> seeds;
+    /// What a seed varies (`[seeds] scope`): "integrator" (default) seeds each fitted method's
+    /// initialisation and training order over one autoencoder per scene; "autoencoder" also
+    /// trains one autoencoder per seed (its seed the suite's seed), and every method that uses
+    /// the autoencoder is fitted once per seed on that seed's autoencoder.
+    SeedScope seed_scope = SeedScope::integrator;
     std::vector<SceneSpec> scenes;
     // evaluation
     std::string sequences = "test";

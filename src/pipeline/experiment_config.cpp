@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -198,6 +199,11 @@ AblationSpec read_ablation(ConfigTable a, const std::set<std::string>& names)
 
 } // namespace
 
+const char* seed_scope_name(SeedScope scope)
+{
+    return scope == SeedScope::autoencoder ? "autoencoder" : "integrator";
+}
+
 const std::vector<std::string>& experiment_stages()
 {
     static const std::vector<std::string> stages{"simulate", "autoencoder", "integrators", "rollouts", "tables", "plots", "videos", "diagnose"};
@@ -219,14 +225,32 @@ ExperimentConfig parse_experiment(const toml::table& root, const std::string& pa
     ex.description = cfg.get_string("description", "");
     ex.output_dir = cfg.get_string("output_dir", "runs/" + ex.name);
     ex.threads = cfg.get_count("threads", 0, 0, kMaxThreads);
-    for (const long long seed : cfg.get_int_array("seeds", {}, 0, kMaxSeed)) {
+    // `seeds = [0, 1, 2]`, or a table `[seeds]` with `values = [...]` and `scope`.
+    std::optional<ConfigTable> seed_table = root.contains("seeds") && root.at("seeds").is_table()
+                                                ? std::optional<ConfigTable>(cfg.require_table("seeds"))
+                                                : std::nullopt;
+    ConfigTable& seed_cfg = seed_table ? *seed_table : cfg;
+    const std::string seed_key = seed_table ? "values" : "seeds";
+    if (seed_table && !seed_table->has("values")) seed_table->fail("values", "list the seeds: values = [0, 1, 2]");
+    for (const long long seed : seed_cfg.get_int_array(seed_key, {}, 0, kMaxSeed)) {
         constexpr size_t kMaxSeeds = 100;
         if (std::find(ex.seeds.begin(), ex.seeds.end(), std::uint64_t(seed)) != ex.seeds.end())
-            cfg.fail("seeds", "duplicate seed " + std::to_string(seed));
+            seed_cfg.fail(seed_key, "duplicate seed " + std::to_string(seed));
         ex.seeds.push_back(std::uint64_t(seed));
-        if (ex.seeds.size() > kMaxSeeds) cfg.fail("seeds", "at most " + std::to_string(kMaxSeeds) + " seeds");
+        if (ex.seeds.size() > kMaxSeeds) seed_cfg.fail(seed_key, "at most " + std::to_string(kMaxSeeds) + " seeds");
     }
-    if (cfg.has("seeds") && ex.seeds.empty()) cfg.fail("seeds", "list at least one seed (or leave the key out)");
+    if (seed_cfg.has(seed_key) && ex.seeds.empty())
+        seed_cfg.fail(seed_key, "list at least one seed (or leave the key out)");
+    if (seed_table) {
+        const std::string scope = seed_table->get_string("scope", seed_scope_name(ex.seed_scope));
+        if (scope == "autoencoder")
+            ex.seed_scope = SeedScope::autoencoder;
+        else if (scope != "integrator")
+            seed_table->fail("scope", "unknown scope '" + scope + "' (integrator: a seed varies each method's own "
+                                      "initialisation over one autoencoder; autoencoder: every seed also trains "
+                                      "its own autoencoder)");
+        seed_table->finish();
+    }
 
     ex.recipe = cfg.get_string("recipe", ex.recipe);
     if (ex.recipe != "paper" && ex.recipe != "none")

@@ -30,9 +30,10 @@ const char* unit_kind_name(UnitKind kind)
     return "?";
 }
 
-AutoencoderOptions resolved_autoencoder(const SceneSpec& spec, const Scene& scene)
+AutoencoderOptions resolved_autoencoder(const SceneSpec& spec, const Scene& scene, std::optional<std::uint64_t> seed)
 {
     AutoencoderOptions ao = spec.autoencoder;
+    if (seed) ao.seed = *seed;
     if (!spec.latent_given) ao.latent_dim = default_latent_dim(scene.name);
     if (spec.recipe == "paper" && !spec.hidden_given) {
         const std::vector<long long> hidden = paper_autoencoder_hidden(scene.name);
@@ -97,16 +98,18 @@ const Unit* ExperimentPlan::find(const std::string& id) const
     return nullptr;
 }
 
+bool unit_output_current(const UnitOutput& output)
+{
+    if (!fs::exists(output.file)) return false;
+    std::ifstream in(output.file + ".key");
+    std::string key;
+    std::getline(in, key);
+    return key == output.key;
+}
+
 bool unit_complete(const Unit& unit)
 {
-    for (const UnitOutput& o : unit.outputs) {
-        if (!fs::exists(o.file)) return false;
-        std::ifstream in(o.file + ".key");
-        std::string key;
-        std::getline(in, key);
-        if (key != o.key) return false;
-    }
-    return true;
+    return std::all_of(unit.outputs.begin(), unit.outputs.end(), unit_output_current);
 }
 
 namespace {
@@ -121,6 +124,7 @@ struct SceneGroup {
 /// One fit of one method at one point: its seed and keys.
 struct Slot {
     std::optional<std::uint64_t> seed;
+    const SceneGroup* group = nullptr;  ///< the scene unit whose dataset and autoencoder it uses
     std::string fit_key, rollout_key;
     bool operator==(const Slot& o) const
     {
@@ -162,35 +166,49 @@ private:
     void plan_scene(size_t s)
     {
         const std::string& label = m_ex.scenes[s].label;
+        // One scene unit per distinct autoencoder: per sweep point whose [autoencoder] keys
+        // differ, and with `[seeds] scope = "autoencoder"` per seed as well.
+        const bool per_seed = m_ex.seed_scope == SeedScope::autoencoder;
         std::vector<SceneGroup> groups;
-        std::vector<size_t> group_of(m_points.size());
         std::vector<size_t> first_point;
+        std::vector<std::optional<std::uint64_t>> group_seed;
+        m_group_of.assign(m_points.size(), {});
         for (size_t p = 0; p < m_points.size(); ++p) {
             const SceneSpec& spec = m_points[p]->scenes[s];
             const Scene& scene = scene_of(spec);
-            SceneGroup g;
-            g.sim_key = simulate_key(scene);
-            const AutoencoderOptions ao = resolved_autoencoder(spec, scene);
-            g.latent = ao.latent_dim;
-            g.ae_key = autoencoder_stage_key(g.sim_key, ao);
-            auto same = std::find_if(groups.begin(), groups.end(), [&](const SceneGroup& o) { return o.ae_key == g.ae_key; });
-            if (same == groups.end()) {
-                groups.push_back(g);
-                first_point.push_back(p);
-                same = groups.end() - 1;
+            std::vector<std::optional<std::uint64_t>> variants{std::nullopt};
+            if (per_seed && !m_points[p]->seeds.empty()) variants.assign(m_points[p]->seeds.begin(), m_points[p]->seeds.end());
+            for (const std::optional<std::uint64_t>& seed : variants) {
+                SceneGroup g;
+                g.sim_key = simulate_key(scene);
+                const AutoencoderOptions ao = resolved_autoencoder(spec, scene, seed);
+                g.latent = ao.latent_dim;
+                g.ae_key = autoencoder_stage_key(g.sim_key, ao);
+                auto same = std::find_if(groups.begin(), groups.end(), [&](const SceneGroup& o) { return o.ae_key == g.ae_key; });
+                if (same == groups.end()) {
+                    groups.push_back(g);
+                    first_point.push_back(p);
+                    group_seed.push_back(seed);
+                    same = groups.end() - 1;
+                }
+                m_group_of[p].emplace_back(seed, size_t(same - groups.begin()));
             }
-            group_of[p] = size_t(same - groups.begin());
         }
+        const bool points_differ = std::any_of(m_group_of.begin(), m_group_of.end(),
+                                               [&](const auto& v) { return v != m_group_of.front(); });
         for (size_t g = 0; g < groups.size(); ++g) {
-            const std::string suffix = groups.size() > 1 ? "." + m_points[first_point[g]]->point_label : "";
+            const ExperimentConfig& point = *m_points[first_point[g]];
+            const std::string suffix = (points_differ ? "." + point.point_label : std::string()) +
+                                       (group_seed[g] ? ".seed" + std::to_string(*group_seed[g]) : std::string());
             groups[g].id = "scene." + label + suffix;
             groups[g].dir = m_plan.run_dir + "/" + label + suffix;
             Unit u;
             u.id = groups[g].id;
             u.kind = UnitKind::Scene;
             u.scene = label;
-            u.point = groups.size() > 1 ? m_points[first_point[g]]->point_label : "";
-            u.point_text = groups.size() > 1 ? m_points[first_point[g]]->point_text : "";
+            u.seed = group_seed[g];
+            u.point = points_differ ? point.point_label : "";
+            u.point_text = points_differ ? point.point_text : "";
             u.point_index = first_point[g];
             u.scene_index = s;
             u.scene_dir = groups[g].dir;
@@ -203,7 +221,7 @@ private:
         const size_t methods = m_ex.scenes[s].methods.size();
         for (size_t m = 0; m <= methods; ++m) {
             if (m == methods && !m_ex.full_space) break;
-            plan_method(s, m, m == methods, groups, group_of);
+            plan_method(s, m, m == methods, groups);
         }
     }
 
@@ -214,38 +232,53 @@ private:
         return *m_reference;
     }
 
-    std::vector<Slot> slots_of(size_t p, size_t s, size_t m, bool full_space, const SceneGroup& g)
+    /// The scene group whose autoencoder the fit with `seed` at point `p` uses.
+    const SceneGroup& group_for(size_t p, std::optional<std::uint64_t> seed, const std::vector<SceneGroup>& groups) const
+    {
+        for (const auto& [group_seed, g] : m_group_of[p]) {
+            if (!group_seed || group_seed == seed) return groups[g];
+        }
+        return groups[m_group_of[p].front().second];
+    }
+
+    std::vector<Slot> slots_of(size_t p, size_t s, size_t m, bool full_space, const std::vector<SceneGroup>& groups)
     {
         Method& method = method_of(p, s, m, full_space);
-        method.resolve({scene_of(m_points[p]->scenes[s]).name, g.latent});
+        const SceneGroup& first = groups[m_group_of[p].front().second];
+        method.resolve({scene_of(m_points[p]->scenes[s]).name, first.latent});
         const std::vector<std::uint64_t>& entry_seeds =
             full_space ? m_points[p]->seeds : m_points[p]->scenes[s].methods[m].seeds;
         const std::vector<std::uint64_t>& seeds = entry_seeds.empty() ? m_points[p]->seeds : entry_seeds;
         std::vector<Slot> slots;
-        auto add = [&](std::optional<std::uint64_t> seed) {
+        auto add = [&](std::optional<std::uint64_t> seed, const SceneGroup& g) {
             Slot slot;
             slot.seed = seed;
+            slot.group = &g;
             slot.fit_key = method_stage_key(method, g.sim_key, g.ae_key);
             slot.rollout_key = rollout_stage_key(slot.fit_key, *m_points[p]);
             slots.push_back(slot);
         };
+        // Under `[seeds] scope = "autoencoder"` a method without a seed of its own that uses
+        // the autoencoder (fulton_full, say) still runs once per seed: one per autoencoder.
+        const bool per_autoencoder = m_group_of[p].size() > 1 && method.needs_autoencoder();
         if (!seeds.empty() && method.set_seed(seeds.front())) {
             for (const std::uint64_t seed : seeds) {
                 method.set_seed(seed);
-                add(seed);
+                add(seed, group_for(p, seed, groups));
             }
+        } else if (!seeds.empty() && per_autoencoder) {
+            for (const std::uint64_t seed : seeds) add(seed, group_for(p, seed, groups));
         } else {
-            add(std::nullopt);
+            add(std::nullopt, first);
         }
         return slots;
     }
 
-    void plan_method(size_t s, size_t m, bool full_space, const std::vector<SceneGroup>& groups,
-                     const std::vector<size_t>& group_of)
+    void plan_method(size_t s, size_t m, bool full_space, const std::vector<SceneGroup>& groups)
     {
         const std::string name = full_space ? "full_space" : m_ex.scenes[s].methods[m].name;
         std::vector<std::vector<Slot>> slots;
-        for (size_t p = 0; p < m_points.size(); ++p) slots.push_back(slots_of(p, s, m, full_space, groups[group_of[p]]));
+        for (size_t p = 0; p < m_points.size(); ++p) slots.push_back(slots_of(p, s, m, full_space, groups));
         const bool shared = std::all_of(slots.begin(), slots.end(), [&](const auto& v) { return v == slots.front(); });
         for (size_t p = 0; p < (shared ? 1 : m_points.size()); ++p) {
             PlannedRow row;
@@ -256,7 +289,7 @@ private:
                 std::string stem = name;
                 if (!shared) stem += "." + m_points[p]->point_label;
                 if (slot.seed) stem += ".seed" + std::to_string(*slot.seed);
-                row.eval_units.push_back(unit_for(s, m, full_space, p, shared, stem, slot, groups[group_of[p]]));
+                row.eval_units.push_back(unit_for(s, m, full_space, p, shared, stem, slot, *slot.group));
                 if (slot.seed) row.seeds.push_back(*slot.seed);
             }
             m_plan.rows.push_back(std::move(row));
@@ -315,6 +348,8 @@ private:
     std::unique_ptr<Method> m_reference;
     std::vector<Unit> m_units;
     std::map<std::string, std::string> m_planned;  ///< dedupe key -> eval unit id
+    /// Of the scene being planned, per point: (seed or none, index of its scene group).
+    std::vector<std::vector<std::pair<std::optional<std::uint64_t>, size_t>>> m_group_of;
 };
 
 std::string json_strings(const std::vector<std::string>& items)

@@ -90,10 +90,15 @@ std::string manifest_jsonl(const ExperimentConfig& ex, const ExperimentPlan& pla
 
 /// True if every output of `unit` exists with its key.
 bool unit_complete(const Unit& unit);
+/// True if `output` exists with its key (its `.key` sidecar).
+bool unit_output_current(const UnitOutput& output);
 
 // ---- cache keys, shared by the planner and the stages (run_experiment.cpp) ----------
-/// The autoencoder options a scene trains with (latent default per scene filled in).
-AutoencoderOptions resolved_autoencoder(const SceneSpec& spec, const Scene& scene);
+/// The autoencoder options a scene trains with (latent default per scene filled in); `seed`:
+/// a scene unit's own seed under `[seeds] scope = "autoencoder"` (Unit::seed), which replaces
+/// the [autoencoder] seed.
+AutoencoderOptions resolved_autoencoder(const SceneSpec& spec, const Scene& scene,
+                                        std::optional<std::uint64_t> seed = std::nullopt);
 std::string simulate_key(const Scene& scene);
 std::string autoencoder_stage_key(const std::string& sim_key, const AutoencoderOptions& options);
 /// A method's artefact key (the method resolved and its seed set).

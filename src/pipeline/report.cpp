@@ -42,8 +42,11 @@ std::string aggregation_text(const SceneResult& r)
     size_t most = 0;
     for (const auto& m : r.methods)
         most = std::max(most, m.seeds.empty() ? m.summaries.size() : m.summaries.size() / m.seeds.size());
-    if (most <= 1) return "One test sequence per row.";
-    return "Rows combine " + std::to_string(most) +
+    const bool seeded = std::any_of(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return m.seeds.size() > 1; });
+    if (most <= 1) return seeded ? "One test sequence per run; a row with seeds aggregates its runs ('seeds')." : "One test sequence per row.";
+    return std::string(seeded ? "Each run (one seed's fit, or the one fit of a method without seeds) combines "
+                              : "Rows combine ") +
+           std::to_string(most) +
            " sequences: horizons are the worst case (the earliest over the sequences), "
            "percentages, errors, KE ratios and times the mean over the sequences (each sequence's errors "
            "aggregated before its own horizon), the boundary violation the largest.";
@@ -159,7 +162,14 @@ Table comparison_table(const SceneResult& r, const std::vector<std::string>& onl
     for (const auto& m : r.methods) seeds = std::max(seeds, m.per_seed.size());
     if (seeds > 1)
         t.caption += " Methods trained once per seed (" + std::to_string(seeds) + " seeds) show " +
-                     seed_statistics_text(seeds) + "; the others one run (no seed, or an entry that lists one seed).";
+                     seed_statistics_text(seeds) + "; the others one run (no seed, or an entry that lists one seed)." +
+                     (r.seed_scope == SeedScope::autoencoder
+                          ? " Seed scope autoencoder: each seed trained its own autoencoder as well, and every "
+                            "method that uses the autoencoder ran once per seed on that seed's autoencoder, so the "
+                            "intervals include the autoencoder's variation."
+                          : " Seed scope integrator: the seeds vary each method's initialisation and training "
+                            "order over one autoencoder (seed " + std::to_string(r.autoencoder_seed) +
+                            "), so the intervals leave out the autoencoder's variation.");
     // A [sweep]: one row per point, labelled; rows the sweep does not change are shared.
     const bool swept = std::any_of(r.methods.begin(), r.methods.end(), [](const MethodResult& m) { return !m.point.empty(); });
     if (swept)
@@ -436,7 +446,9 @@ std::string seeds_text(const ExperimentConfig& ex)
 {
     std::string text;
     for (const std::uint64_t s : ex.seeds) text += (text.empty() ? "" : ", ") + std::to_string(s);
-    return text.empty() ? "none (each method's own)" : text;
+    if (text.empty()) return "none (each method's own)";
+    return text + (ex.seed_scope == SeedScope::autoencoder ? " (scope autoencoder: each seed trains its own autoencoder)"
+                                                           : " (scope integrator: one autoencoder per scene)");
 }
 
 /// "ours 3, supervised_l2 1": the fit_version of each row's method (learned ones; others 1).
@@ -495,6 +507,7 @@ void write_provenance(const ExperimentConfig& ex, const std::vector<SceneResult>
         "  \"dirty\": " + (build_dirty() ? "true" : "false") + ",\n"
         "  \"build\": " + json_quote(LB_BUILD_TYPE) + ",\n"
         "  \"seeds\": [" + seeds + "],\n"
+        "  \"seed_scope\": " + json_quote(seed_scope_name(ex.seed_scope)) + ",\n"
         "  \"threads\": " + std::to_string(ex.threads > 0 ? ex.threads : num_threads()) + ",\n"
         "  \"fit_versions\": {" + versions + "},\n"
         "  \"command\": [" + command + "],\n"

@@ -68,6 +68,9 @@ struct SceneResult {
     /// The scene's autoencoder (of its first scene unit): its training curves and seed.
     nn::TrainingCurves autoencoder_curves;
     std::uint64_t autoencoder_seed = 0;
+    /// What the suite's seeds vary: with SeedScope::autoencoder every seed has its own
+    /// autoencoder (the curves and seed above are the first seed's).
+    SeedScope seed_scope = SeedScope::integrator;
     std::vector<MethodResult> methods;
     /// Rows left out because a unit of a method with contained failures (method = "python")
     /// failed: "name: why", one per row; the methods table names them in a note.

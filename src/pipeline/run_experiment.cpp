@@ -213,6 +213,7 @@ public:
         r.jvp_ms = measure_jvp_ms(*ls.ae);
         r.autoencoder_curves = nn::load_training_curves(h5::File::open(su.outputs[1].file), "");
         r.autoencoder_seed = ls.ae->seed();
+        r.seed_scope = m_ex.seed_scope;
         for (const PlannedRow& row : m_plan.rows) {
             if (row.scene_index != s) continue;
             std::string why;
@@ -292,13 +293,22 @@ private:
         ls.scene = load_scene(spec.scene_path, {spec.variant});
         const std::string& data_file = u.outputs[0].file;
         m_cache.run("simulate", u.scene + ": full-space dataset", data_file, u.outputs[0].key, [&] {
+            // Another scene unit of this scene (a seed's under `[seeds] scope = "autoencoder"`, a
+            // sweep point's) may already hold this very dataset: copy it rather than simulate again.
+            for (const Unit& twin : m_plan.units) {
+                if (twin.kind != UnitKind::Scene || twin.id == u.id || twin.outputs[0].key != u.outputs[0].key) continue;
+                if (!unit_output_current(twin.outputs[0]) || m_cache.forced("simulate")) continue;
+                log_info("%s: full-space dataset copied from %s (same simulation key)", u.scene.c_str(), twin.id.c_str());
+                copy_file_atomically(twin.outputs[0].file, data_file);
+                return;
+            }
             SimulateOptions so;
             so.progress = log_level() >= LogLevel::Info;
             save_dataset(simulate_scene(ls.scene, so), data_file);
         });
         ls.data = load_dataset(data_file);
         ls.model = std::make_unique<PhysicsModel>(ls.data.physics);
-        AutoencoderOptions ao = resolved_autoencoder(spec, ls.scene);
+        AutoencoderOptions ao = resolved_autoencoder(spec, ls.scene, u.seed);
         ao.progress = log_level() >= LogLevel::Info;
         ao.checkpoint_path = u.scene_dir + "/ae.checkpoint.h5";
         ao.resume = !m_cache.forced("autoencoder");
@@ -333,7 +343,7 @@ private:
         ls.scene = load_scene(spec.scene_path, {spec.variant});
         ls.data = load_dataset(u->outputs[0].file);
         ls.model = std::make_unique<PhysicsModel>(ls.data.physics);
-        ls.ae_options = resolved_autoencoder(spec, ls.scene);
+        ls.ae_options = resolved_autoencoder(spec, ls.scene, u->seed);
         ls.ae = std::make_shared<Autoencoder>(Autoencoder::load(u->outputs[1].file, ls.data.physics));
         return ls;
     }

@@ -269,13 +269,18 @@ TEST(Report, SeedsGiveAnIntervalOrARangeAndTheBudgetIsStated)
     EXPECT_EQ(cell_of(md, rows[3], "training"), "40/100 epochs, 60 s (cap 60 s), time cap hit (3/3)");
     // One sequence per seed: the caption counts sequences, not seeds × sequences (the full
     // rods_rotate tables said "Rows combine 9 sequences" for 3 seeds of 3 sequences).
-    EXPECT_NE(md.find("One test sequence per row."), std::string::npos) << md;
+    EXPECT_NE(md.find("One test sequence per run; a row with seeds aggregates its runs ('seeds')."), std::string::npos)
+        << md;
     EXPECT_EQ(md.find("Rows combine"), std::string::npos) << md;
+    // the seeds' scope is stated: here the default, one autoencoder for every seed
+    EXPECT_NE(md.find("Seed scope integrator: the seeds vary each method's initialisation"), std::string::npos) << md;
     three.summaries.push_back(three.summaries.back());  // each of the 3 seeds with 2 sequences
     three.summaries.push_back(three.summaries.back());
     three.summaries.push_back(three.summaries.back());
     const std::string md2 = read_all(write_tables(ex, {scene_with({three})}, dir + "_two").at(0));
-    EXPECT_NE(md2.find("Rows combine 2 sequences"), std::string::npos) << md2;
+    EXPECT_NE(md2.find("Each run (one seed's fit, or the one fit of a method without seeds) combines 2 sequences"),
+              std::string::npos)
+        << md2;
 
     // Horizons are counts: all their digits, not 1.5e+03 (5 seeds: ± with the same digits).
     MethodResult longer = method_result("long", "latent_mlp", "self_supervised", true, {});

@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/log.hpp"
+#include "io/table.hpp"
 #include "pipeline/experiment.hpp"
 #include "methods/registry.hpp"
 #include "pipeline/plan.hpp"
@@ -153,6 +154,95 @@ TEST(WorkUnits, AutoencoderSweepPlansOneSceneUnitPerAutoencoder)
     EXPECT_EQ(plan.find("scene.cantilever_small.p02"), nullptr);  // p02 trains the autoencoder p00 trains
     EXPECT_EQ(plan.find("fit.cantilever_small.ours.p02")->depends_on,
               std::vector<std::string>{"scene.cantilever_small.p00"});
+}
+
+/// kSwept without its sweep, with fulton_full (no seed of its own, but it steps in the
+/// autoencoder) and `[seeds] values = [3, 4]` of the given scope.
+std::string seed_scope_suite(const std::string& scope)
+{
+    std::string text = replaced(kSwept, "[sweep]\n\"training.noise_fraction\" = [0.0, 0.2]\nseeds = [3, 4]\n",
+                                "[seeds]\nvalues = [3, 4]\nscope = \"" + scope + "\"\n");
+    return replaced(text, "[[scenes]]", "[[integrators]]\nname = \"exact\"\nmethod = \"fulton_full\"\n[[scenes]]");
+}
+
+TEST(WorkUnits, AutoencoderSeedScopePlansOneAutoencoderPerSeed)
+{
+    const ExperimentPlan plan = plan_experiment(
+        load_experiment(write_suite("ae_scope", seed_scope_suite("autoencoder")), builtin_methods()),
+        fresh_dir("units_ae_scope_run"));
+    const Unit* s3 = plan.find("scene.cantilever_small.seed3");
+    const Unit* s4 = plan.find("scene.cantilever_small.seed4");
+    ASSERT_NE(s3, nullptr);
+    ASSERT_NE(s4, nullptr);
+    EXPECT_EQ(plan.find("scene.cantilever_small"), nullptr);
+    EXPECT_EQ(s3->outputs[0].key, s4->outputs[0].key);  // one dataset
+    EXPECT_NE(s3->outputs[1].key, s4->outputs[1].key);  // two autoencoders
+    EXPECT_EQ(plan.find("fit.cantilever_small.ours.seed3")->depends_on, std::vector<std::string>{s3->id});
+    EXPECT_EQ(plan.find("fit.cantilever_small.ours.seed4")->depends_on, std::vector<std::string>{s4->id});
+    // a method without a seed of its own runs once per autoencoder if it uses one ...
+    ASSERT_NE(plan.find("eval.cantilever_small.exact.seed3"), nullptr);
+    EXPECT_EQ(plan.find("eval.cantilever_small.exact.seed4")->scene_unit, s4->id);
+    // ... and once if it does not (linear PCA of the full-space data, the reference)
+    ASSERT_NE(plan.find("eval.cantilever_small.pca"), nullptr);
+    EXPECT_EQ(plan.find("eval.cantilever_small.pca.seed4"), nullptr);
+    ASSERT_NE(plan.find("eval.cantilever_small.full_space"), nullptr);
+    for (const PlannedRow& row : plan.rows) {
+        if (row.name == "exact" || row.name == "ours") EXPECT_EQ(row.seeds, (std::vector<std::uint64_t>{3, 4})) << row.name;
+        if (row.name == "pca" || row.name == "full_space") EXPECT_TRUE(row.seeds.empty()) << row.name;
+    }
+
+    const ExperimentPlan shared = plan_experiment(
+        load_experiment(write_suite("int_scope", seed_scope_suite("integrator")), builtin_methods()),
+        fresh_dir("units_int_scope_run"));
+    ASSERT_NE(shared.find("scene.cantilever_small"), nullptr);
+    EXPECT_EQ(shared.find("scene.cantilever_small.seed3"), nullptr);
+    EXPECT_EQ(shared.find("fit.cantilever_small.ours.seed4")->depends_on,
+              std::vector<std::string>{"scene.cantilever_small"});
+    EXPECT_NE(shared.find("eval.cantilever_small.exact"), nullptr);  // one autoencoder: one exact step
+
+    try {
+        load_experiment(write_suite("bad_scope", seed_scope_suite("both")), builtin_methods());
+        ADD_FAILURE() << "an unknown scope was accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("seeds.scope"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("unknown scope 'both'"), std::string::npos) << e.what();
+    }
+}
+
+TEST(WorkUnits, AutoencoderSeedScopeRunTrainsOneAutoencoderPerSeedAndSaysSo)
+{
+    const std::string path = write_suite("ae_scope_run", seed_scope_suite("autoencoder"));
+    const std::string run_dir = fresh_dir("units_ae_scope_runs");
+    const auto run = run_cli("run " + path + " -o " + run_dir);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    // the dataset is simulated once and copied; each seed has its own autoencoder
+    EXPECT_NE(run.output.find("full-space dataset copied from scene.cantilever_small.seed3"), std::string::npos)
+        << run.output;
+    const std::string ae3 = run_dir + "/cantilever_small.seed3/ae.h5", ae4 = run_dir + "/cantilever_small.seed4/ae.h5";
+    ASSERT_TRUE(fs::exists(ae3));
+    ASSERT_TRUE(fs::exists(ae4));
+    EXPECT_NE(read_all(ae3), read_all(ae4));
+    EXPECT_EQ(read_all(run_dir + "/cantilever_small.seed3/data.h5"), read_all(run_dir + "/cantilever_small.seed4/data.h5"));
+    const std::string md = read_all(run_dir + "/tables/methods_cantilever_small.md");
+    EXPECT_NE(md.find("Seed scope autoencoder: each seed trained its own autoencoder"), std::string::npos);
+    // fulton_full's row holds one run per autoencoder
+    // (read as a parser would: the exact method's label holds a quoted comma)
+    const Table csv = read_csv(run_dir + "/tables/methods_cantilever_small.csv");
+    const auto column = [&](const std::string& name) {
+        const auto at = std::find(csv.columns.begin(), csv.columns.end(), name);
+        EXPECT_NE(at, csv.columns.end()) << name;
+        return size_t(at - csv.columns.begin());
+    };
+    const size_t method = column("method"), n_seeds = column("n_seeds");
+    int exact_rows = 0;
+    for (const auto& row : csv.rows) {
+        if (row.at(method).text != "exact") continue;
+        ++exact_rows;
+        ASSERT_TRUE(row.at(n_seeds).value.has_value());
+        EXPECT_EQ(*row.at(n_seeds).value, 2.0);
+    }
+    EXPECT_EQ(exact_rows, 2);  // training and test windows
+    EXPECT_NE(read_all(run_dir + "/provenance.json").find("\"seed_scope\": \"autoencoder\""), std::string::npos);
 }
 
 TEST(WorkUnits, MalformedSweepIsRefusedNamingFileAndKey)
