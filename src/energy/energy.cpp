@@ -26,6 +26,19 @@ double Energy::value(const VectorXd& x) const
     return sum;
 }
 
+namespace {
+/// The calling thread's element buffer of at least `size` doubles: kept (and only grown)
+/// between calls, so the full-space Newton step's gradients allocate nothing once the
+/// largest energy has been evaluated on this thread (tests/sim/test_step_allocations.cpp).
+double* element_buffer(int which, size_t size)
+{
+    thread_local std::vector<double> buffers[2];
+    std::vector<double>& b = buffers[which];
+    if (b.size() < size) b.resize(size);
+    return b.data();
+}
+} // namespace
+
 void Energy::add_gradient(const VectorXd& x, double weight, VectorXd& g) const
 {
     const Index n = num_elements();
@@ -33,14 +46,13 @@ void Energy::add_gradient(const VectorXd& x, double weight, VectorXd& g) const
     const int dofs = 3 * k;
     // Element gradients are computed in parallel, then scattered serially
     // (elements share vertices, so a parallel scatter would race).
-    std::vector<double> local(static_cast<size_t>(n * dofs));
-#pragma omp parallel for schedule(static) if (n >= kParallelElementThreshold)
-    for (Index e = 0; e < n; ++e) {
-        element_gradient(e, x, local.data() + e * dofs);
-    }
+    double* local = element_buffer(0, static_cast<size_t>(n * dofs));
+    // parallel_for: below the threshold or on one thread no OpenMP region is opened
+    // (libgomp allocates a team for each).
+    parallel_for(n, n >= kParallelElementThreshold, [&](std::ptrdiff_t e) { element_gradient(e, x, local + e * dofs); });
     for (Index e = 0; e < n; ++e) {
         const int* nodes = element_nodes(e);
-        const double* ge = local.data() + e * dofs;
+        const double* ge = local + e * dofs;
         for (int a = 0; a < k; ++a) {
             g.segment<3>(3 * Index(nodes[a])) += weight * Eigen::Map<const Vector3d>(ge + 3 * a);
         }
@@ -77,15 +89,15 @@ double Energy::add_value_gradient(const VectorXd& x, double weight, VectorXd& g)
     // several threads) has no caller in the pipeline, which calls it inside parallel regions;
     // it gives the serial pass's numbers for the cloth's terms, not bit for bit for the
     // lane-blocked tetrahedra (TetStVK), whose serial pass runs its own element order.
-    std::vector<double> local(static_cast<size_t>(n * dofs));
-    std::vector<double> values(static_cast<size_t>(n));
+    double* local = element_buffer(0, static_cast<size_t>(n * dofs));
+    double* values = element_buffer(1, static_cast<size_t>(n));
 #pragma omp parallel for schedule(static)
     for (Index e = 0; e < n; ++e) {
-        values[size_t(e)] = element_value_gradient(e, x, local.data() + e * dofs);
+        values[e] = element_value_gradient(e, x, local + e * dofs);
     }
     for (Index e = 0; e < n; ++e) {
-        sum += values[size_t(e)];
-        scatter(e, local.data() + e * dofs);
+        sum += values[e];
+        scatter(e, local + e * dofs);
     }
     return sum;
 }
@@ -140,9 +152,15 @@ double EnergySum::value(const VectorXd& x) const
 
 VectorXd EnergySum::gradient(const VectorXd& x) const
 {
-    VectorXd g = VectorXd::Zero(x.size());
-    for (const auto& term : m_terms) term.energy->add_gradient(x, term.weight, g);
+    VectorXd g;
+    gradient(x, g);
     return g;
+}
+
+void EnergySum::gradient(const VectorXd& x, VectorXd& g) const
+{
+    g.setZero(x.size());
+    for (const auto& term : m_terms) term.energy->add_gradient(x, term.weight, g);
 }
 
 double EnergySum::value_gradient(const VectorXd& x, VectorXd& g) const

@@ -210,6 +210,8 @@ public:
 
     double value(const VectorXd& x) const;
     VectorXd gradient(const VectorXd& x) const;
+    /// gradient(x) written to g (resized; no allocation once it has the size).
+    void gradient(const VectorXd& x, VectorXd& g) const;
     /// Σ_k w_k E_k(x), with its gradient written to g (resized): one pass per term.
     double value_gradient(const VectorXd& x, VectorXd& g) const;
     /// Per-term values, in the order of terms() (for logging and metrics).

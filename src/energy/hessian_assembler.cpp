@@ -94,10 +94,11 @@ void HessianAssembler::assemble(const EnergySum& energies, const VectorXd& x, bo
         const size_t block = size_t(dofs * dofs);
         std::vector<double>& buffer = m_buffers[k];
         buffer.resize(size_t(n) * block);
-#pragma omp parallel for schedule(dynamic, 64) if (n >= kParallelElementThreshold)
-        for (Index e = 0; e < n; ++e) {
-            energy.element_hessian(e, x, project_psd, buffer.data() + size_t(e) * block);
-        }
+        // parallel_for: below the threshold or on one thread no OpenMP region is opened
+        // (libgomp allocates a team for each).
+        double* out = buffer.data();
+        parallel_for(n, n >= kParallelElementThreshold,
+                     [&](std::ptrdiff_t e) { energy.element_hessian(e, x, project_psd, out + size_t(e) * block); });
         const std::vector<int>& scatter = m_scatter[k];
         const double w = term.weight;
         for (size_t i = 0; i < scatter.size(); ++i) {
@@ -108,9 +109,15 @@ void HessianAssembler::assemble(const EnergySum& energies, const VectorXd& x, bo
 
 VectorXd HessianAssembler::restrict(const VectorXd& full) const
 {
-    VectorXd reduced(m_num_unknowns);
-    for (Index i = 0; i < m_num_unknowns; ++i) reduced[i] = full[m_unknown_to_dof[i]];
+    VectorXd reduced;
+    restrict(full, reduced);
     return reduced;
+}
+
+void HessianAssembler::restrict(const VectorXd& full, VectorXd& reduced) const
+{
+    reduced.resize(m_num_unknowns);
+    for (Index i = 0; i < m_num_unknowns; ++i) reduced[i] = full[m_unknown_to_dof[i]];
 }
 
 void HessianAssembler::add_prolonged(const VectorXd& reduced, VectorXd& full) const

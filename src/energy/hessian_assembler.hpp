@@ -30,6 +30,8 @@ public:
 
     /// g_free[i] = g[dof] for each unknown DOF (restriction of a full gradient).
     VectorXd restrict(const VectorXd& full) const;
+    /// restrict(full) written to `reduced` (resized; no allocation once it has the size).
+    void restrict(const VectorXd& full, VectorXd& reduced) const;
     /// Add a vector over unknowns back onto the full DOF vector.
     void add_prolonged(const VectorXd& reduced, VectorXd& full) const;
     const VectorXi& dof_to_unknown() const { return m_dof_to_unknown; }

@@ -89,7 +89,8 @@ double PhysicsModel::kinetic_energy(const VectorXd& x, const VectorXd& x_prev) c
 
 void PhysicsModel::apply_bc(const MatrixX3d& targets, VectorXd& x) const
 {
-    overwrite_dirichlet(m_spec.bc_indices, flatten(targets), x);
+    // Row-major B×3: its storage is the xyz-interleaved 3B vector (flatten without the copy).
+    overwrite_dirichlet(m_spec.bc_indices, Eigen::Map<const VectorXd>(targets.data(), targets.size()), x);
 }
 
 void overwrite_dirichlet(const std::vector<int>& bc_indices, const Eigen::Ref<const VectorXd>& targets,

@@ -4,10 +4,12 @@
 
 namespace lb {
 
-FreeDofObjective::FreeDofObjective(HessianAssembler& assembler, const EnergySum& energies, const VectorXd& x_full)
-    : m_assembler(assembler), m_energies(energies), m_x(x_full)
+FreeDofObjective::FreeDofObjective(HessianAssembler& assembler, const EnergySum& energies, const VectorXd& x_full,
+                                   FreeDofBuffers* buffers)
+    : m_assembler(assembler), m_energies(energies), m_buffers(buffers ? *buffers : m_own), m_x(m_buffers.x_full)
 {
     assert(x_full.size() == assembler.dof_to_unknown().size());
+    m_x = x_full;
 }
 
 const VectorXd& FreeDofObjective::full_state(const Eigen::Ref<const VectorXd>& y)
@@ -24,7 +26,12 @@ double FreeDofObjective::value(const Eigen::Ref<const VectorXd>& y) { return m_e
 
 void FreeDofObjective::gradient(const Eigen::Ref<const VectorXd>& y, Eigen::Ref<VectorXd> g)
 {
-    g = m_assembler.restrict(m_energies.gradient(full_state(y)));
+    VectorXd& full = m_buffers.gradient_full;
+    m_energies.gradient(full_state(y), full);
+    const VectorXi& map = m_assembler.dof_to_unknown();
+    for (Index dof = 0; dof < map.size(); ++dof) {
+        if (map[dof] >= 0) g[map[dof]] = full[dof];
+    }
 }
 
 double FreeDofObjective::value_and_gradient(const Eigen::Ref<const VectorXd>& y, Eigen::Ref<VectorXd> g)

@@ -11,14 +11,26 @@
 
 namespace lb {
 
+/// The full-size vectors a FreeDofObjective works in. Kept by the caller across
+/// minimisations (NewtonSolver does), they stop allocating once they have the size.
+struct FreeDofBuffers {
+    VectorXd x_full;         ///< 3N state, prescribed DOFs fixed
+    VectorXd gradient_full;  ///< 3N gradient before restriction
+};
+
 class FreeDofObjective final : public Objective {
 public:
     /// @param assembler  built for `energies`' terms (its pattern is the Hessian's)
     /// @param x_full     3N state; its prescribed DOFs are kept, its unknowns ignored
-    FreeDofObjective(HessianAssembler& assembler, const EnergySum& energies, const VectorXd& x_full);
+    /// @param buffers    storage to work in (must outlive the objective); nullptr: its own
+    FreeDofObjective(HessianAssembler& assembler, const EnergySum& energies, const VectorXd& x_full,
+                     FreeDofBuffers* buffers = nullptr);
+    FreeDofObjective(const FreeDofObjective&) = delete;
+    FreeDofObjective& operator=(const FreeDofObjective&) = delete;
 
     /// The unknowns of a full state (restriction).
     VectorXd unknowns(const VectorXd& x_full) const { return m_assembler.restrict(x_full); }
+    void unknowns(const VectorXd& x_full, VectorXd& y) const { m_assembler.restrict(x_full, y); }
     /// The full state of unknowns y: prescribed DOFs from the construction state.
     const VectorXd& full_state(const Eigen::Ref<const VectorXd>& y);
 
@@ -32,7 +44,9 @@ public:
 private:
     HessianAssembler& m_assembler;
     const EnergySum& m_energies;
-    VectorXd m_x;  // 3N, prescribed DOFs fixed
+    FreeDofBuffers m_own;     // used when the caller gives no buffers
+    FreeDofBuffers& m_buffers;
+    VectorXd& m_x;            // m_buffers.x_full
 };
 
 } // namespace lb

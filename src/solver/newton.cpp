@@ -109,7 +109,7 @@ bool NewtonWorkspace::newton_direction(Objective& f, const VectorXd& x, bool pro
                 message = ws.m_cholesky->message();
                 return status;
             },
-            [&](const VectorXd& b, VectorXd& out) { out = ws.m_cholesky->solve(b); });
+            [&](const VectorXd& b, VectorXd& out) { ws.m_cholesky->solve(b, out); });
     }
     MatrixXd& H = ws.m_dense;
     f.dense_hessian(x, project_psd, H);
@@ -256,17 +256,23 @@ SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt
 }
 
 NewtonSolver::NewtonSolver(const VectorXi& dof_to_unknown, const EnergySum& energies, NewtonOptions options)
-    : m_options(options), m_assembler(dof_to_unknown, energies)
+    : m_options(options), m_assembler(dof_to_unknown, energies), m_free(std::make_unique<FreeDofBuffers>())
 {
     m_workspace.analyze(m_assembler.matrix());
 }
 
+NewtonSolver::~NewtonSolver() = default;
+NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
+NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
+
 SolveSummary NewtonSolver::minimize(const EnergySum& energies, VectorXd& x)
 {
-    FreeDofObjective objective(m_assembler, energies, x);
-    VectorXd y = objective.unknowns(x);
-    const SolveSummary summary = minimize_newton(objective, y, m_options, &m_workspace);
-    x = objective.full_state(y);
+    // The objective works in m_free (3N state and gradient) and Newton on m_y: from the
+    // second call on, with the sizes reached, a solve allocates nothing of its own.
+    FreeDofObjective objective(m_assembler, energies, x, m_free.get());
+    objective.unknowns(x, m_y);
+    const SolveSummary summary = minimize_newton(objective, m_y, m_options, &m_workspace);
+    x = objective.full_state(m_y);
     return summary;
 }
 

@@ -106,11 +106,16 @@ SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt
 
 /// Newton on E(x) = Σ_k w_k E_k over the unknown DOFs of a mesh: owns the Hessian
 /// assembler (pattern and scatter maps) and the CHOLMOD analysis, both built once.
+struct FreeDofBuffers;
+
 class NewtonSolver {
 public:
     /// @param dof_to_unknown  3N map, −1 for prescribed DOFs (see HessianAssembler)
     /// @param energies        the terms (the sparsity pattern is built from them once)
     NewtonSolver(const VectorXi& dof_to_unknown, const EnergySum& energies, NewtonOptions options);
+    ~NewtonSolver();
+    NewtonSolver(NewtonSolver&&) noexcept;
+    NewtonSolver& operator=(NewtonSolver&&) noexcept;
 
     /// Minimise `energies` (the terms given at construction) over the unknowns starting
     /// from x (3N, prescribed DOFs already set); x is overwritten by the result. Never
@@ -125,6 +130,8 @@ private:
     NewtonOptions m_options;
     HessianAssembler m_assembler;
     NewtonWorkspace m_workspace;
+    std::unique_ptr<FreeDofBuffers> m_free;  // the objective's 3N vectors, kept between calls
+    VectorXd m_y;                            // the unknowns
 };
 
 } // namespace lb

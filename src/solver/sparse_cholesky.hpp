@@ -31,6 +31,9 @@ public:
     FactorStatus factorize(const SparseMatrixd& lower);
     /// Solve A x = b with the last successful factorisation.
     VectorXd solve(const VectorXd& b) const;
+    /// solve(b) written to x (resized): CHOLMOD's solution and workspace are kept between
+    /// calls, so a solve of the same size allocates nothing.
+    void solve(const VectorXd& b, VectorXd& x);
     const std::string& message() const { return m_message; }
     bool analyzed() const { return m_analyzed; }
 
