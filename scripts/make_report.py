@@ -504,7 +504,8 @@ def load_bench(path):
             raise ReportError(f"{rel}: benchmark '{name}' has time_unit '{unit}'")
         family = name.split("/")[0]
         entry = {"real_time": real, "cpu_time": cpu, "unit": unit, "family": family,
-                 "error": b.get("error_message", "error") if b.get("error_occurred") else None}
+                 "error": b.get("error_message", "error") if b.get("error_occurred") else None,
+                 "counters": {k: b[k] for k in ("dofs", "newton_it") if isinstance(b.get(k), (int, float))}}
         if b.get("run_type") == "aggregate":
             if b.get("aggregate_name") == "median":
                 rows[name] = dict(entry, repetitions=b.get("repetitions"), source="median")
@@ -537,6 +538,72 @@ def bench_commit(path, context):
     return m.group(1) if m else "not recorded"
 
 
+# Li et al. 2025, Table 1 ("Quantitative comparison against reference offline simulation"), as
+# printed: example, full-space DoF, Simulation, Ours Integration, Ours Decoder, Ours Total (ms).
+PAPER_TABLE1 = [
+    ("rods_rotate", "Hair Rotation", "10,800", "268", "0.264", "0.456", "0.720"),
+    ("rods_translate", "Hair Translation", "5,400", "208", "0.172", "0.386", "0.558"),
+    ("cloth", "Cloth", "576", "18.83", "0.109", "0.163", "0.272"),
+    ("armadillo", "Armadillo", "10,020", "136.8", "0.253", "0.236", "0.489"),
+    ("bunny_ears", "Bunny Ears", "8,046", "112.6", "0.228", "0.198", "0.426"),
+]
+UNIT_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
+
+
+def bench_row(rows, name):
+    """The row named `name`, or `name/min_time:...` (the suffix MinTime() adds)."""
+    if name in rows:
+        return rows[name]
+    for key, row in rows.items():
+        if key.startswith(name + "/min_time:"):
+            return row
+    return None
+
+
+def render_table1(rows):
+    """Table 1 beside the paper's, or "" when the file holds none of its benchmarks."""
+    names = {"sim": "sim_step/{}", "int": "nn/integrate/float/{}", "dec": "nn/decode/float/{}",
+             "tot": "nn/frame/float/{}"}
+    if not any(bench_row(rows, n.format(scene)) for scene, *_ in PAPER_TABLE1 for n in names.values()):
+        return ""
+
+    def ours(kind, scene):
+        row = bench_row(rows, names[kind].format(scene))
+        if row is None and kind == "sim":  # the name before 2026-12-07
+            row = bench_row(rows, f"full_space_step/{scene}_full")
+        if row is None:
+            return "not in this file", None
+        if row["error"]:
+            message = re.sub(r"(?<![\w.])/(?:[^\s/']+/)+", "", row["error"]).replace("|", "/")
+            return f"did not run: {message}", None
+        ms = row["real_time"] * UNIT_MS[row["unit"]]
+        return f"{sig(ms, 4)}", ms
+
+    def ratio(paper, ms):
+        return f"{sig(float(paper.replace(',', '')) / ms, 3)}×" if ms else "–"
+
+    out = ["\n### Table 1 beside the paper's\n\n"
+           "Ours: `sim_step/<scene>` (one full-space implicit-Euler step of the full-size scene, "
+           "the file's thread count), `nn/integrate|decode|frame/float/<scene>` (the Table 2 "
+           "networks with random weights, batch 1, one thread), median real time in ms. Paper: "
+           "Li et al. 2025, Table 1, as printed (their machine, \"all timings are reported on CPU\"). "
+           "The ratio is the paper's time over ours (above 1: ours is faster on this machine).\n\n"
+           "| example | DoF (ours) | DoF (paper) | simulation: ours | paper | ratio | "
+           "integration: ours | paper | decoder: ours | paper | total: ours | paper | ratio |\n"
+           "|:--|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n"]
+    for scene, label, dof, sim, integ, dec, tot in PAPER_TABLE1:
+        sim_text, sim_ms = ours("sim", scene)
+        sim_row = bench_row(rows, names["sim"].format(scene)) or bench_row(rows, f"full_space_step/{scene}_full")
+        dofs = sim_row["counters"].get("dofs") if sim_row and not sim_row["error"] else None
+        int_text, _ = ours("int", scene)
+        dec_text, _ = ours("dec", scene)
+        tot_text, tot_ms = ours("tot", scene)
+        out.append(f"| {label} (`{scene}`) | {f'{int(dofs):,}' if dofs else '–'} | {dof} | {sim_text} | {sim} | "
+                   f"{ratio(sim, sim_ms)} | {int_text} | {integ} | {dec_text} | {dec} | {tot_text} | {tot} | "
+                   f"{ratio(tot, tot_ms)} |\n")
+    return "".join(out)
+
+
 def render_performance(root):
     bench_dir = os.path.join(root, "results", "bench")
     files = sorted(f for f in os.listdir(bench_dir) if f.endswith(".json")) if os.path.isdir(bench_dir) else []
@@ -563,6 +630,7 @@ def render_performance(root):
         if "executable" in ctx:
             facts.append(f"executable: `{ctx['executable']}`")
         parts.append("".join(f"- {x}\n" for x in facts))
+        parts.append(render_table1(data["rows"]))
         families = {}
         for name, row in data["rows"].items():
             families.setdefault(row["family"], []).append((name, row))

@@ -170,6 +170,25 @@ class Markup(unittest.TestCase):
         self.assertIn("| `fam/a` | 2000 | 1000 | us | 1 |", text)
         self.assertIn("did not run: no mesh", text)
 
+    def test_table1_sets_the_step_and_the_networks_beside_the_paper(self):
+        bench = {"context": {"date": "2026-12-07T00:00:00+00:00"}, "benchmarks": [
+            {"name": "sim_step/cloth/min_time:3.000", "run_name": "sim_step/cloth/min_time:3.000",
+             "run_type": "iteration", "real_time": 9.415, "cpu_time": 9.0, "time_unit": "ms", "dofs": 576},
+            {"name": "nn/frame/float/cloth", "run_name": "nn/frame/float/cloth", "run_type": "iteration",
+             "real_time": 34.0, "cpu_time": 34.0, "time_unit": "us"},
+            {"name": "sim_step/armadillo", "run_name": "sim_step/armadillo", "run_type": "iteration",
+             "real_time": 0, "cpu_time": 0, "time_unit": "ms", "error_occurred": True,
+             "error_message": "/home/x/data/meshes/armadillo.1.node does not exist"}]}
+        (self.root / "results" / "bench" / "2026-12-07-def5678.json").write_text(json.dumps(bench), encoding="utf-8")
+        text = make_report.render_performance(str(self.root))
+        # 18.83 ms / 9.415 ms = 2.00; 0.272 ms / 0.034 ms = 8.00
+        self.assertIn("| Cloth (`cloth`) | 576 | 576 | 9.415 | 18.83 | 2× | not in this file | 0.109 | "
+                      "not in this file | 0.163 | 0.034 | 0.272 | 8× |", text)
+        self.assertIn("| Armadillo (`armadillo`) | – | 10,020 | did not run: armadillo.1.node does not exist |", text)
+        self.assertNotIn("/home/x", text)
+        # the file without any Table 1 benchmark gets no such table
+        self.assertEqual(text.count("### Table 1 beside the paper's"), 1)
+
     def test_bad_benchmark_file_names_it_and_writes_nothing(self):
         (self.root / "results" / "bench" / "broken.json").write_text("{not json", encoding="utf-8")
         p = run("--root", self.root, "performance")
