@@ -16,6 +16,7 @@
 
 #include "core/parallel.hpp"
 #include "nn/batch_norm.hpp"
+#include "nn/half.hpp"
 #include "nn/linear.hpp"
 #include "nn/residual_block.hpp"
 
@@ -106,6 +107,79 @@ void packed_gemv(const S* packed, const S* bias, const S* x, Index in, Index pan
         }
         for (int v = 0; v < vectors_per_panel; ++v) Ops::storeu(yp + v * L, acc[v]);
     }
+}
+
+// ---- reduced-precision weights (float network) -----------------------------------------
+/// L consecutive stored weights as a float vector: halves (F16C), int8 (AVX2), or their
+/// scalar conversions where the instructions are not compiled in.
+inline Simd<float>::V load_weights(const std::uint16_t* p)
+{
+#if defined(LB_NN_AVX_FMA) && defined(__F16C__)
+    return _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
+#elif defined(LB_NN_AVX_FMA)
+    return _mm256_setr_ps(half_to_float(p[0]), half_to_float(p[1]), half_to_float(p[2]), half_to_float(p[3]),
+                          half_to_float(p[4]), half_to_float(p[5]), half_to_float(p[6]), half_to_float(p[7]));
+#else
+    return half_to_float(*p);
+#endif
+}
+
+inline Simd<float>::V load_weights(const std::int8_t* p)
+{
+#if defined(LB_NN_AVX_FMA) && defined(__AVX2__)
+    return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+#elif defined(LB_NN_AVX_FMA)
+    return _mm256_setr_ps(float(p[0]), float(p[1]), float(p[2]), float(p[3]), float(p[4]), float(p[5]), float(p[6]),
+                          float(p[7]));
+#else
+    return float(*p);
+#endif
+}
+
+/// packed_gemv<float> for weights stored as W (halves or int8) in the same panels. int8:
+/// the products q · x are accumulated from zero, then y = s ⊙ acc + bias (+ y) with one
+/// FMA per vector (`row_scale` padded as y); halves: as the float kernel.
+template <typename W>
+void packed_gemv_reduced(const W* packed, const float* row_scale, const float* bias, const float* x, Index in,
+                         Index panels, float* y, bool accumulate)
+{
+    using Ops = Simd<float>;
+    using V = Ops::V;
+    constexpr int L = Ops::lanes;
+    constexpr Index R = panel_rows<float>();
+    constexpr bool scaled = std::is_same_v<W, std::int8_t>;
+    for (Index p = 0; p < panels; ++p) {
+        const W* P = packed + p * in * R;
+        float* yp = y + p * R;
+        V init[vectors_per_panel], acc[vectors_per_panel];
+        for (int v = 0; v < vectors_per_panel; ++v) {
+            init[v] = bias ? Ops::loadu(bias + p * R + v * L) : Ops::zero();
+            if (accumulate) init[v] = Ops::add(init[v], Ops::loadu(yp + v * L));
+            acc[v] = scaled ? Ops::zero() : init[v];
+        }
+        for (Index j = 0; j < in; ++j) {
+            const V xj = Ops::set1(x[j]);
+            const W* col = P + j * R;
+            for (int v = 0; v < vectors_per_panel; ++v) acc[v] = Ops::fmadd(load_weights(col + v * L), xj, acc[v]);
+        }
+        for (int v = 0; v < vectors_per_panel; ++v) {
+            if constexpr (scaled) acc[v] = Ops::fmadd(acc[v], Ops::loadu(row_scale + p * R + v * L), init[v]);
+            Ops::storeu(yp + v * L, acc[v]);
+        }
+    }
+}
+
+/// Copy `out` × `in` values into panels of R rows (column j of panel p at (p·in + j)·R),
+/// zero-padded: the layout of every packed_gemv kernel.
+template <typename T, typename Get>
+void pack_panels(std::vector<T, Eigen::aligned_allocator<T>>& packed, Index out, Index in, Index R, Get get)
+{
+    const Index panels = (out + R - 1) / R;
+    packed.assign(static_cast<std::size_t>(panels * in * R), T(0));
+    for (Index p = 0; p < panels; ++p)
+        for (Index j = 0; j < in; ++j)
+            for (Index i = 0; i < R && p * R + i < out; ++i)
+                packed[static_cast<std::size_t>((p * in + j) * R + i)] = get(p * R + i, j);
 }
 
 /// Rows of a panel of the transposed weights used by the reverse-mode kernel.
@@ -359,7 +433,8 @@ void activate_with_derivative(ActivationKind kind, A&& a, D&& d, GrowingMatrix<t
 } // namespace
 
 template <typename S>
-BasicInferenceNetwork<S>::BasicInferenceNetwork(const Sequential& net, const Standardizer* input_standardizer)
+BasicInferenceNetwork<S>::BasicInferenceNetwork(const Sequential& net, const Standardizer* input_standardizer,
+                                                WeightFormat format)
 {
     if (net.empty()) throw std::invalid_argument("InferenceNetwork: empty network");
     m_in = net.in_features();
@@ -396,12 +471,7 @@ BasicInferenceNetwork<S>::BasicInferenceNetwork(const Sequential& net, const Sta
             op.out = d.W.rows();
             op.W = d.W.cast<S>();
             op.b = padded_vector<S>(d.b);
-            const Index panels = padded<S>(op.out) / R;
-            op.packed.assign(static_cast<std::size_t>(panels * op.in * R), S(0));
-            for (Index p = 0; p < panels; ++p)
-                for (Index j = 0; j < op.in; ++j)
-                    for (Index i = 0; i < R && p * R + i < op.out; ++i)
-                        op.packed[static_cast<std::size_t>((p * op.in + j) * R + i)] = op.W(p * R + i, j);
+            pack_panels(op.packed, op.out, op.in, R, [&](Index i, Index j) { return op.W(i, j); });
             constexpr Index RT = transposed_panel_rows<S>();
             const Index t_panels = (op.in + RT - 1) / RT;
             op.packed_t.assign(static_cast<std::size_t>(t_panels * op.out * RT), S(0));
@@ -425,14 +495,54 @@ BasicInferenceNetwork<S>::BasicInferenceNetwork(const Sequential& net, const Sta
     for (std::size_t i = 0; i < m_ops.size(); ++i)
         if (m_ops[i].act != ActivationKind::identity) m_pre[i] = Vector::Zero(m_ops[i].out);
     m_adjoint.resize(m_buffers.size());
+    set_weight_format(format);
 }
 
 template <typename S>
-void BasicInferenceNetwork<S>::affine(const Op& op)
+void BasicInferenceNetwork<S>::set_weight_format(WeightFormat format)
+{
+    if constexpr (!std::is_same_v<S, float>) {
+        if (format != WeightFormat::f32)
+            throw std::invalid_argument("InferenceNetworkD: weight format " + to_string(format) +
+                                        " is for the float InferenceNetwork (the double network keeps f64 weights)");
+    } else {
+        constexpr Index R = panel_rows<float>();
+        for (Op& op : m_ops) {
+            op.packed_f16 = {};
+            op.packed_int8 = {};
+            op.row_scale = Vector();
+            if (op.kind != Op::Kind::affine) continue;
+            if (format == WeightFormat::f16) {
+                pack_panels(op.packed_f16, op.out, op.in, R, [&](Index i, Index j) { return float_to_half(op.W(i, j)); });
+            } else if (format == WeightFormat::int8) {
+                const QuantizedRows rows = quantize_rows(op.W);
+                pack_panels(op.packed_int8, op.out, op.in, R, [&](Index i, Index j) { return rows.q(i, j); });
+                op.row_scale = Vector::Ones(padded<float>(op.out));
+                op.row_scale.head(op.out) = rows.scale;
+            }
+        }
+    }
+    m_format = format;
+}
+
+template <typename S>
+void BasicInferenceNetwork<S>::affine(const Op& op, bool full_precision)
 {
     Vector& y = m_buffers[static_cast<std::size_t>(op.dst)];
-    packed_gemv<S>(op.packed.data(), op.b.data(), m_buffers[static_cast<std::size_t>(op.src)].data(), op.in,
-                   y.size() / panel_rows<S>(), y.data(), op.accumulate);
+    const S* x = m_buffers[static_cast<std::size_t>(op.src)].data();
+    const Index panels = y.size() / panel_rows<S>();
+    if constexpr (std::is_same_v<S, float>) {
+        if (!full_precision && m_format == WeightFormat::f16) {
+            packed_gemv_reduced(op.packed_f16.data(), nullptr, op.b.data(), x, op.in, panels, y.data(), op.accumulate);
+            return;
+        }
+        if (!full_precision && m_format == WeightFormat::int8) {
+            packed_gemv_reduced(op.packed_int8.data(), op.row_scale.data(), op.b.data(), x, op.in, panels, y.data(),
+                                op.accumulate);
+            return;
+        }
+    }
+    packed_gemv<S>(op.packed.data(), op.b.data(), x, op.in, panels, y.data(), op.accumulate);
 }
 
 template <typename S>
@@ -443,7 +553,7 @@ void BasicInferenceNetwork<S>::run(bool record_tape, std::size_t end)
         auto src = m_buffers[static_cast<std::size_t>(op.src)].head(op.in);
         auto dst = m_buffers[static_cast<std::size_t>(op.dst)].head(op.out);
         switch (op.kind) {
-        case Op::Kind::affine: affine(op); break;
+        case Op::Kind::affine: affine(op, record_tape); break;
         case Op::Kind::scale: dst.array() = op.b.array() * src.array() + op.t.array(); break;
         case Op::Kind::act: dst = src; break;
         case Op::Kind::add: dst += src; break;
@@ -479,8 +589,19 @@ void BasicInferenceNetwork<S>::gemv_only()
     for (const Op& op : m_ops) {
         if (op.kind != Op::Kind::affine) continue;
         Vector& y = m_buffers[static_cast<std::size_t>(op.dst)];
-        packed_gemv<S>(op.packed.data(), nullptr, m_buffers[static_cast<std::size_t>(op.src)].data(), op.in,
-                       y.size() / panel_rows<S>(), y.data(), false);
+        const S* x = m_buffers[static_cast<std::size_t>(op.src)].data();
+        const Index panels = y.size() / panel_rows<S>();
+        if constexpr (std::is_same_v<S, float>) {
+            if (m_format == WeightFormat::f16) {
+                packed_gemv_reduced(op.packed_f16.data(), nullptr, nullptr, x, op.in, panels, y.data(), false);
+                continue;
+            }
+            if (m_format == WeightFormat::int8) {  // the row scales are part of the int8 product
+                packed_gemv_reduced(op.packed_int8.data(), op.row_scale.data(), nullptr, x, op.in, panels, y.data(), false);
+                continue;
+            }
+        }
+        packed_gemv<S>(op.packed.data(), nullptr, x, op.in, panels, y.data(), false);
     }
 }
 
@@ -742,7 +863,15 @@ template <typename S>
 long long BasicInferenceNetwork<S>::weight_bytes() const
 {
     long long n = 0;
-    for (const Op& op : m_ops) n += static_cast<long long>(op.packed.size() * sizeof(S));
+    for (const Op& op : m_ops) {
+        switch (m_format) {
+        case WeightFormat::f32: n += static_cast<long long>(op.packed.size() * sizeof(S)); break;
+        case WeightFormat::f16: n += static_cast<long long>(op.packed_f16.size() * sizeof(std::uint16_t)); break;
+        case WeightFormat::int8:
+            n += static_cast<long long>(op.packed_int8.size()) + static_cast<long long>(op.row_scale.size()) * sizeof(S);
+            break;
+        }
+    }
     return n;
 }
 
@@ -750,6 +879,7 @@ template <typename S>
 std::string BasicInferenceNetwork<S>::describe() const
 {
     std::ostringstream os;
+    os << "weights " << (std::is_same_v<S, float> ? to_string(m_format) : std::string("f64")) << "\n";
     for (const Op& op : m_ops) {
         switch (op.kind) {
         case Op::Kind::affine: os << (op.accumulate ? "affine+= " : "affine ") << op.in << "->" << op.out; break;

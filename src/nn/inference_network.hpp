@@ -24,12 +24,24 @@
 // streaming the weights from L3 (≈3.9 MB float for the armadillo integrator +
 // decoder); bench_nn's "gemv_bound" rows measure the GEMVs alone for comparison.
 //
+// Weight format (float network only; nn/weight_format.hpp): evaluate() and gemv_only()
+// stream the weights as f32 (default), f16 or int8 in the same panel layout, converted to
+// float in registers (F16C vcvtph2ps; AVX2 vpmovsxbd + vcvtdq2ps; scalar conversions in
+// the portable loop) and accumulated in float32:
+//   f16:   y = Ŵ x + b, Ŵ = W rounded to half;
+//   int8:  y_i = s_i (q(i, :) · x) + b_i, the row scale applied once per row, before the bias.
+// Biases, BatchNorm scales (folded ones are in W) and activations stay float32. The
+// derivative paths (jacobian_rows, including its primal pass, forward_batch and
+// vjp_batch) always use the float32 weights, so their results do not depend on the format.
+// f32 gives the same bits as before the formats existed.
+//
 // jacobian_rows: a primal pass (skipping the final PCA layer when it is a plain
 // Linear, whose Jacobian rows are just W(rows, :)) keeps the pre-activations, then
 // reverse mode runs all requested rows at once through Wᵀ packed the same way
 // (panels of 4 SIMD vectors, every weight vector loaded once for up to 3 rows), so
 // one vertex costs about two passes over the hidden-layer weights. Forward mode
 // (tangents = identity on the latent) uses Eigen products on plain copies of W.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -39,6 +51,7 @@
 #include "nn/network_derivatives.hpp"
 #include "nn/sequential.hpp"
 #include "nn/standardizer.hpp"
+#include "nn/weight_format.hpp"
 #include "nn/workspace.hpp"
 
 namespace lb::nn {
@@ -54,9 +67,16 @@ public:
 
     BasicInferenceNetwork() = default;
     /// Compile `net` as evaluated in eval mode (BatchNorm running statistics), with an
-    /// optional input standardizer applied first. Throws std::invalid_argument for an
-    /// empty network or unsupported layer types.
-    explicit BasicInferenceNetwork(const Sequential& net, const Standardizer* input_standardizer = nullptr);
+    /// optional input standardizer applied first, streaming its weights in `format` (see
+    /// set_weight_format). Throws std::invalid_argument for an empty network or
+    /// unsupported layer types.
+    explicit BasicInferenceNetwork(const Sequential& net, const Standardizer* input_standardizer = nullptr,
+                                   WeightFormat format = WeightFormat::f32);
+
+    /// Re-pack the weights evaluate() and gemv_only() stream (allocates; not per frame).
+    /// Throws std::invalid_argument for f16 or int8 on the double network.
+    void set_weight_format(WeightFormat format);
+    WeightFormat weight_format() const { return m_format; }
 
     Index in_features() const { return m_in; }
     Index out_features() const { return m_out; }
@@ -88,9 +108,11 @@ public:
 
     /// Multiply-adds of one evaluate() (weights touched once each).
     long long multiply_adds() const;
-    /// Bytes of packed weights streamed by one evaluate().
+    /// Bytes of packed weights streamed by one evaluate() in the current format (int8:
+    /// the row scales included; biases are not counted in any format).
     long long weight_bytes() const;
-    /// One line per op, e.g. "affine 12->200 swish [1 -> 2]".
+    /// The weight format ("weights f16"; "weights f64" for the double network), then one
+    /// line per op, e.g. "affine 12->200 swish [1 -> 2]".
     std::string describe() const;
 
     /// The packed GEMVs alone (no bias, no activation, no adds), into each op's
@@ -106,6 +128,11 @@ public:
         Index in = 0, out = 0;
         std::vector<Scalar, Eigen::aligned_allocator<Scalar>> packed;    ///< affine: panel-packed W
         std::vector<Scalar, Eigen::aligned_allocator<Scalar>> packed_t;  ///< affine: panel-packed Wᵀ (reverse mode)
+        /// affine, f16 format: W rounded to half, panel-packed as `packed` (else empty)
+        std::vector<std::uint16_t, Eigen::aligned_allocator<std::uint16_t>> packed_f16;
+        /// affine, int8 format: q, panel-packed as `packed` (else empty)
+        std::vector<std::int8_t, Eigen::aligned_allocator<std::int8_t>> packed_int8;
+        Vector row_scale;  ///< affine, int8 format: s per row, padded to whole panels (else empty)
         Matrix W;   ///< affine: out × in, plain (derivatives)
         Vector b;   ///< affine: bias padded to whole panels;  scale: s
         Vector t;   ///< scale: shift
@@ -115,12 +142,14 @@ public:
 private:
     /// Ops [0, end); with the tape, pre-activations are kept for the derivatives.
     void run(bool record_tape, std::size_t end);
-    void affine(const Op& op);
+    /// With `full_precision`, the float32 panels whatever the format (derivatives' primal).
+    void affine(const Op& op, bool full_precision);
     /// True if the output is written by the last op alone, a plain affine one (the PCA
     /// layer): the derivatives then use its weights directly.
     bool output_is_plain_affine() const;
 
     Index m_in = 0, m_out = 0;
+    WeightFormat m_format = WeightFormat::f32;
     std::vector<Op> m_ops;
     std::vector<Vector> m_buffers;     ///< padded to whole panels
     std::vector<Index> m_buffer_size;  ///< logical sizes

@@ -6,7 +6,11 @@
 //   nn/jvp_vertex/<precision>/<ex>   Jacobian of one vertex's 3 outputs w.r.t. the
 //                                    latent (Table 2 "Computing Jvp")
 // precision: float = InferenceNetwork, double = InferenceNetworkD (same fused ops),
-// double_sequential = the training-path Sequential::forward in eval mode.
+// double_sequential = the training-path Sequential::forward in eval mode; f16 / int8 =
+// InferenceNetwork streaming half or int8 weights (nn/weight_format.hpp), float32
+// accumulation. gemv_bound kernels: packed_float, packed_f16, packed_int8 (the
+// InferenceNetwork's gemv_only() in that format; int8 includes its row scales) and
+// eigen_float (Eigen's GEMV on plain copies).
 // Architectures: paper/paper_architectures.hpp (decoder: residual blocks + BatchNorm +
 // Swish, PCA layer 50 -> DOF; integrator: Swish MLP with input 2·latent + 3·p).
 // Counters: madds = multiply-adds per frame, weight_GBps = packed weight bytes
@@ -31,6 +35,7 @@ struct Models {
     Sequential decoder, integrator;
     Standardizer standardizer;
     InferenceNetwork decoder_f, integrator_f;
+    InferenceNetwork decoder_f16, integrator_f16, decoder_int8, integrator_int8;
     InferenceNetworkD decoder_d, integrator_d;
     std::vector<MatrixXf> weights_f;  ///< plain column-major copies of every affine weight
     VectorXf q_f;
@@ -59,6 +64,10 @@ Models& models(const std::string& name)
                                   rng.uniform_vector(m.arch.integrator.in_dim, 0.5, 2));
     m.decoder_f = InferenceNetwork(m.decoder);
     m.integrator_f = InferenceNetwork(m.integrator, &m.standardizer);
+    m.decoder_f16 = InferenceNetwork(m.decoder, nullptr, WeightFormat::f16);
+    m.integrator_f16 = InferenceNetwork(m.integrator, &m.standardizer, WeightFormat::f16);
+    m.decoder_int8 = InferenceNetwork(m.decoder, nullptr, WeightFormat::int8);
+    m.integrator_int8 = InferenceNetwork(m.integrator, &m.standardizer, WeightFormat::int8);
     m.decoder_d = InferenceNetworkD(m.decoder);
     m.integrator_d = InferenceNetworkD(m.integrator, &m.standardizer);
     for (const auto* net : {&m.integrator_f, &m.decoder_f})
@@ -91,6 +100,35 @@ void frame_float(benchmark::State& state, std::string name)
     set_counters(state, m.integrator_f.multiply_adds() + m.decoder_f.multiply_adds(),
                  m.integrator_f.weight_bytes() + m.decoder_f.weight_bytes());
 }
+
+/// The (integrator, decoder) pair streaming weights in `format`.
+std::pair<InferenceNetwork*, InferenceNetwork*> networks(Models& m, WeightFormat format)
+{
+    switch (format) {
+    case WeightFormat::f16: return {&m.integrator_f16, &m.decoder_f16};
+    case WeightFormat::int8: return {&m.integrator_int8, &m.decoder_int8};
+    case WeightFormat::f32: break;
+    }
+    return {&m.integrator_f, &m.decoder_f};
+}
+
+void frame_reduced(benchmark::State& state, const std::string& name, WeightFormat format)
+{
+    Models& m = models(name);
+    auto [integrator, decoder] = networks(m, format);
+    VectorXf z(m.arch.latent_dim), x(m.arch.full_dof);
+    for (auto _ : state) {
+        integrator->evaluate(m.q_f.data(), z.data());
+        decoder->evaluate(z.data(), x.data());
+        benchmark::DoNotOptimize(x.data());
+        benchmark::ClobberMemory();
+    }
+    set_counters(state, integrator->multiply_adds() + decoder->multiply_adds(),
+                 integrator->weight_bytes() + decoder->weight_bytes());
+}
+
+void frame_f16(benchmark::State& state, std::string name) { frame_reduced(state, name, WeightFormat::f16); }
+void frame_int8(benchmark::State& state, std::string name) { frame_reduced(state, name, WeightFormat::int8); }
 
 void frame_double(benchmark::State& state, std::string name)
 {
@@ -153,6 +191,22 @@ void gemv_bound_packed(benchmark::State& state, std::string name)
                  m.integrator_f.weight_bytes() + m.decoder_f.weight_bytes());
 }
 
+void gemv_bound_reduced(benchmark::State& state, const std::string& name, WeightFormat format)
+{
+    Models& m = models(name);
+    auto [integrator, decoder] = networks(m, format);
+    for (auto _ : state) {
+        integrator->gemv_only();
+        decoder->gemv_only();
+        benchmark::ClobberMemory();
+    }
+    set_counters(state, integrator->multiply_adds() + decoder->multiply_adds(),
+                 integrator->weight_bytes() + decoder->weight_bytes());
+}
+
+void gemv_bound_f16(benchmark::State& state, std::string name) { gemv_bound_reduced(state, name, WeightFormat::f16); }
+void gemv_bound_int8(benchmark::State& state, std::string name) { gemv_bound_reduced(state, name, WeightFormat::int8); }
+
 void gemv_bound_eigen(benchmark::State& state, std::string name)
 {
     Models& m = models(name);
@@ -210,11 +264,15 @@ const int registered = [] {
     using Fn = void (*)(benchmark::State&, std::string);
     const std::vector<std::pair<std::string, Fn>> kinds = {
         {"nn/frame/float/", frame_float},
+        {"nn/frame/f16/", frame_f16},
+        {"nn/frame/int8/", frame_int8},
         {"nn/frame/double/", frame_double},
         {"nn/frame/double_sequential/", frame_double_sequential},
         {"nn/integrate/float/", integrate_float},
         {"nn/decode/float/", decode_float},
         {"nn/gemv_bound/packed_float/", gemv_bound_packed},
+        {"nn/gemv_bound/packed_f16/", gemv_bound_f16},
+        {"nn/gemv_bound/packed_int8/", gemv_bound_int8},
         {"nn/gemv_bound/eigen_float/", gemv_bound_eigen},
         {"nn/jvp_vertex/float/", jvp_vertex_float},
         {"nn/jvp_vertex/double/", jvp_vertex_double},
