@@ -72,6 +72,7 @@ public:
     }
     std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
+    bool uses_weight_format() const override { return true; }
     bool set_seed(std::uint64_t seed) override
     {
         m_options.seed = seed;
@@ -156,7 +157,8 @@ public:
                                      const std::string& label) const override
     {
         auto own = std::make_shared<Autoencoder>(Autoencoder::load_from(*artefact, kAutoencoderPrefix, in.model->spec()));
-        return std::make_unique<LatentMlpIntegrator>(label, own, LatentMlpModel::load(*artefact, kIntegratorPrefix));
+        return std::make_unique<LatentMlpIntegrator>(label, own, LatentMlpModel::load(*artefact, kIntegratorPrefix),
+                                                     in.weights);
     }
 
 private:

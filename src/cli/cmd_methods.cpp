@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <algorithm>
 #include <filesystem>
+#include <stdexcept>
 
 #include "baselines/builtin_methods.hpp"
 #include "cli/commands.hpp"
@@ -16,6 +17,7 @@
 #include "io/hdf5.hpp"
 #include "latent/autoencoder.hpp"
 #include "methods/artefact.hpp"
+#include "nn/weight_format.hpp"
 #include "paper/scene_defaults.hpp"
 #include "scene/scene.hpp"
 
@@ -138,7 +140,7 @@ static void print_summary(const std::string& method, const std::string& sequence
 void register_rollout(CLI::App& app)
 {
     struct Args {
-        std::string data, ae, integrator, method, output, name, sequences = "test";
+        std::string data, ae, integrator, method, output, name, sequences = "test", weights = "f32";
         long long frames = 0;  // range-checked before narrowing to int
         bool no_positions = false;
     };
@@ -153,7 +155,16 @@ void register_rollout(CLI::App& app)
     cmd->add_option("--sequences", a->sequences, "test (default: sequences with frames beyond training), all, or a name");
     cmd->add_option("--frames", a->frames, "Roll out at most this many frames");
     cmd->add_flag("--no-positions", a->no_positions, "Do not store the rolled-out positions");
+    cmd->add_option("--weights", a->weights,
+                    "Weights of the batch-1 float inference networks: f32 (default), f16 or int8 (latent_mlp, "
+                    "tan_physics_mlp)");
     cmd->callback([a] {
+        nn::WeightFormat weights;
+        try {
+            weights = nn::weight_format_from_string(a->weights);
+        } catch (const std::invalid_argument& e) {
+            throw ConfigError(std::string("rollout: --weights: ") + e.what());
+        }
         if (a->integrator.empty() == a->method.empty())
             throw ConfigError("rollout: give either --integrator FILE (from `fit`) or --method NAME (nothing to fit)");
         check_output_path(a->output, "-o");
@@ -172,7 +183,12 @@ void register_rollout(CLI::App& app)
             if (method->has_artefact())
                 throw ConfigError("rollout: method '" + a->method + "' needs an artefact: fit it, then pass --integrator");
         }
-        const MethodInputs in = command_line_inputs(data, model, *method, a->ae, "rollout");
+        if (weights != nn::WeightFormat::f32 && !method->uses_weight_format())
+            throw ConfigError("rollout: --weights " + a->weights + ": method '" + method->method_name() +
+                              "' does not roll out through the float inference network (latent_mlp and "
+                              "tan_physics_mlp do)");
+        MethodInputs in = command_line_inputs(data, model, *method, a->ae, "rollout");
+        in.weights = weights;
         method->resolve({data.scene_name, scene_latent(in, data)});
         const std::string label = !a->name.empty()       ? a->name
                                   : !a->integrator.empty() ? std::filesystem::path(a->integrator).stem().string()

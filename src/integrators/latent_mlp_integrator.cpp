@@ -107,9 +107,9 @@ LatentMlpModel LatentMlpModel::load(const h5::File& file, const std::string& pre
 }
 
 LatentMlpIntegrator::LatentMlpIntegrator(std::string name, std::shared_ptr<Autoencoder> autoencoder,
-                                         LatentMlpModel model)
+                                         LatentMlpModel model, nn::WeightFormat weights)
     : m_name(std::move(name)), m_autoencoder(std::move(autoencoder)), m_model(std::move(model)),
-      m_integrator_net(m_model.network, &m_model.inputs), m_decoder_net(m_autoencoder->decoder())
+      m_integrator_net(m_model.network, &m_model.inputs, weights), m_decoder_net(m_autoencoder->decoder(), nullptr, weights)
 {
     if (m_model.latent_dim != m_autoencoder->latent_dim()) {
         throw Error("integrator latent size " + std::to_string(m_model.latent_dim) + " differs from the autoencoder's " +

@@ -9,7 +9,8 @@
 // as the paper's, with a well-scaled output at initialisation.
 //
 // Inference runs the integrator and the decoder through the float
-// InferenceNetwork (BatchNorm folded, no allocation per step). A model trained with
+// InferenceNetwork (BatchNorm folded, no allocation per step), their weights streamed as
+// f32 (default), f16 or int8 (`rollout --weights`, nn/weight_format.hpp). A model trained with
 // overwrite_dirichlet reports positions whose Dirichlet vertices are the frame's targets;
 // one whose p_t holds the boundary pose computes it each step (a 3×3 SVD, allocating).
 #include <memory>
@@ -66,8 +67,10 @@ VectorXd integrator_input(const VectorXd& z_prev, const VectorXd& z_prev2, const
 
 class LatentMlpIntegrator final : public Integrator {
 public:
-    /// @param name  label in tables (e.g. "ours", "supervised_l2")
-    LatentMlpIntegrator(std::string name, std::shared_ptr<Autoencoder> autoencoder, LatentMlpModel model);
+    /// @param name     label in tables (e.g. "ours", "supervised_l2")
+    /// @param weights  what the integrator's and decoder's inference networks stream (f32, f16, int8)
+    LatentMlpIntegrator(std::string name, std::shared_ptr<Autoencoder> autoencoder, LatentMlpModel model,
+                        nn::WeightFormat weights = nn::WeightFormat::f32);
 
     std::string name() const override { return m_name; }
     void reset(const VectorXd& x_prev2, const BoundaryState& bc_prev2, const VectorXd& x_prev,

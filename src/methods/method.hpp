@@ -26,6 +26,7 @@
 
 #include "integrators/integrator.hpp"
 #include "io/toml_config.hpp"
+#include "nn/weight_format.hpp"
 #include "solver/newton.hpp"
 
 namespace lb {
@@ -54,6 +55,10 @@ struct MethodInputs {
     /// memory), for methods that run in another process (method = "python").
     std::string dataset_path;
     std::string autoencoder_path;
+    /// Weights the loaded integrator's batch-1 float inference networks stream in rollouts
+    /// (`rollout --weights`); only methods whose uses_weight_format() is true read it. Not
+    /// part of any fit's options: one artefact is rolled out at several precisions.
+    nn::WeightFormat weights = nn::WeightFormat::f32;
 };
 
 /// Scene facts a method may take defaults from (step 2 above).
@@ -83,6 +88,8 @@ public:
     virtual std::string layers() const { return ""; }
 
     virtual bool needs_autoencoder() const { return false; }
+    /// True if load() honours MethodInputs::weights (its rollouts run nn::InferenceNetwork).
+    virtual bool uses_weight_format() const { return false; }
     /// False for methods with nothing to fit (the full-space reference): no artefact.
     virtual bool has_artefact() const { return true; }
     /// True for the paper's own method: it supplies the rows of Tables 1 and 2.

@@ -158,6 +158,23 @@ TEST(Cli, FitThenRolloutThroughTheRegistry)
     const auto reference = run_cli("rollout " + dir + "/data.h5 --method full_space --sequences all --frames 5 -o " +
                                    dir + "/ref.h5");
     ASSERT_EQ(reference.exit_code, 0) << reference.output;
+    // --weights: an unknown format exits 1 naming it and the valid ones; a method whose rollout
+    // runs no float inference network refuses a reduced one; f32 (the default) is accepted.
+    const auto bad_weights = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/pca.h5 --weights fp8 -o " +
+                                     dir + "/w.h5");
+    EXPECT_EQ(bad_weights.exit_code, 1) << bad_weights.output;
+    EXPECT_NE(bad_weights.output.find("--weights: unknown weight format 'fp8' (expected f32, f16 or int8)"),
+              std::string::npos) << bad_weights.output;
+    EXPECT_FALSE(fs::exists(dir + "/w.h5"));
+    const auto pca_f16 = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/pca.h5 --weights f16 -o " + dir +
+                                 "/w.h5");
+    EXPECT_EQ(pca_f16.exit_code, 1) << pca_f16.output;
+    EXPECT_NE(pca_f16.output.find("does not roll out through the float inference network"), std::string::npos)
+        << pca_f16.output;
+    EXPECT_FALSE(fs::exists(dir + "/w.h5"));
+    const auto pca_f32 = run_cli("rollout " + dir + "/data.h5 --integrator " + dir + "/pca.h5 --weights f32 --frames 5 -o " +
+                                 dir + "/w.h5");
+    EXPECT_EQ(pca_f32.exit_code, 0) << pca_f32.output;
 
     const auto methods = run_cli("methods");
     ASSERT_EQ(methods.exit_code, 0) << methods.output;

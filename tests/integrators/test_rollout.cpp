@@ -8,6 +8,8 @@
 #include "integrators/latent_mlp_integrator.hpp"
 #include "io/hdf5.hpp"
 
+#include <cstdio>
+
 namespace lb {
 namespace {
 
@@ -107,6 +109,39 @@ TEST(LatentMlpIntegrator, PoseInputIsComputedFromEachFramesTargets)
     const VectorXd want = (expected - s.z_prev.col(0)).cwiseQuotient(m.output_scale);
     EXPECT_LT((got - want).cwiseAbs().maxCoeff(), 1e-3 * (1.0 + want.cwiseAbs().maxCoeff()))
         << got.transpose() << " vs " << want.transpose();
+}
+
+// `rollout --weights`: the integrator's and decoder's inference networks stream f16 or int8
+// weights; the positions stay near the f32 ones (a frame of an untrained model on the tiny
+// cloth; the bounds are loose, a lost scale or a wrong panel gives errors of order 1).
+TEST(LatentMlpIntegrator, ReducedWeightsStayNearFloat32)
+{
+    testing::TinyProblem p("cloth", 12);
+    IntegratorTrainOptions o;
+    IntegratorTrainer trainer(*p.model, *p.ae, o);
+    const TrainingSamples s = make_training_samples(*p.ae, p.data, trainer.boundary_input());
+    LatentMlpModel m = LatentMlpModel::create(p.ae->latent_dim(), s.p.rows(), {16}, 4);
+    trainer.prepare(m, s);
+    const SequenceData& seq = p.data.sequences[0];
+    auto state = [&](Index t) {
+        return BoundaryState{seq.bc_params.row(t).transpose(), seq.bc_positions.row(t).transpose()};
+    };
+    auto positions = [&](nn::WeightFormat weights) {
+        LatentMlpIntegrator integrator("ours", p.ae, m, weights);
+        integrator.reset(seq.positions.row(0).transpose(), state(0), seq.positions.row(1).transpose(), state(1));
+        for (Index t = 2; t < 5; ++t) integrator.step(state(t));
+        return VectorXd(integrator.positions());
+    };
+    const VectorXd x32 = positions(nn::WeightFormat::f32);
+    const double extent = (x32.maxCoeff() - x32.minCoeff());
+    for (const auto& [weights, limit] : {std::pair{nn::WeightFormat::f16, 1e-3}, std::pair{nn::WeightFormat::int8, 2e-2}}) {
+        const VectorXd x = positions(weights);
+        const double error = (x - x32).cwiseAbs().maxCoeff() / extent;
+        std::printf("[ weights ] %s: max position difference from f32 / extent %.3g (limit %.0e)\n",
+                    nn::to_string(weights).c_str(), error, limit);
+        EXPECT_LT(error, limit) << nn::to_string(weights);
+        EXPECT_GT(error, 0.0) << nn::to_string(weights) << ": the weights were not reduced";
+    }
 }
 
 TEST(Rollout, FullSpaceReproducesGroundTruth)

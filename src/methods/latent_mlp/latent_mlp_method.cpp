@@ -114,6 +114,7 @@ public:
     }
     std::string layers() const override { return format_list(m_options.hidden); }
     bool needs_autoencoder() const override { return true; }
+    bool uses_weight_format() const override { return true; }
     bool is_paper_method() const override { return m_options.loss == IntegratorLoss::SelfSupervised; }
     bool set_seed(std::uint64_t seed) override
     {
@@ -153,7 +154,8 @@ public:
     std::unique_ptr<Integrator> load(const MethodInputs& in, const h5::File* artefact,
                                      const std::string& label) const override
     {
-        return std::make_unique<LatentMlpIntegrator>(label, in.autoencoder, LatentMlpModel::load(*artefact, "integrator."));
+        return std::make_unique<LatentMlpIntegrator>(label, in.autoencoder, LatentMlpModel::load(*artefact, "integrator."),
+                                                     in.weights);
     }
 
 private:
