@@ -12,9 +12,16 @@ import csv
 import pathlib
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import training_table  # noqa: E402  (scripts/training_table.py)
 
-def read_table(path):
-    lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+
+def read_table(path, thinned=False):
+    """Header and rows; `thinned`: a training table as its published copy keeps it (training_table.py)."""
+    text = path.read_text()
+    if thinned:
+        text = training_table.thin(text)
+    lines = [line for line in text.splitlines() if not line.startswith("#")]
     rows = list(csv.reader(lines))
     if not rows:
         raise SystemExit(f"{path}: no header")
@@ -36,8 +43,11 @@ def compare(dir_a, dir_b):
         problems.append(f"different tables: {a_files} vs {b_files}")
     compared = 0
     for name in sorted(set(a_files) & set(b_files)):
-        head_a, rows_a = read_table(dir_a / name)
-        head_b, rows_b = read_table(dir_b / name)
+        # A published training table keeps fewer epochs: thin the other one the same way.
+        thinned = training_table.is_training_table(name) and any(
+            training_table.is_thinned(d.joinpath(name).read_text()) for d in (dir_a, dir_b))
+        head_a, rows_a = read_table(dir_a / name, thinned)
+        head_b, rows_b = read_table(dir_b / name, thinned)
         if head_a != head_b:
             problems.append(f"{name}: different columns")
             continue

@@ -24,6 +24,9 @@ import shlex
 import shutil
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import training_table  # noqa: E402  (scripts/training_table.py)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -40,6 +43,14 @@ def publish(run_dir, name):
     if os.path.isdir(out):
         shutil.rmtree(out)
     shutil.copytree(tables, os.path.join(out, "tables"), ignore=shutil.ignore_patterns("*.key"))  # stage-cache keys
+    # Training curves: every epoch of every fit is megabytes; the published copy keeps fewer
+    # epochs (scripts/training_table.py; the figures were drawn from the full file).
+    for f in sorted(os.listdir(os.path.join(out, "tables"))):
+        if training_table.is_training_table(f):
+            path = os.path.join(out, "tables", f)
+            with open(path) as fh:
+                text = fh.read()
+            write_atomic(path, training_table.thin(text))
     figures = os.path.join(run_dir, "figures")
     count = 0
     for folder, _, files in os.walk(figures):

@@ -1,25 +1,10 @@
 #include "nn/half.hpp"
 
 #include <cmath>
-#include <cstring>
 
 namespace lb::nn {
 
 namespace {
-
-std::uint32_t bits_of(float x)
-{
-    std::uint32_t u;
-    std::memcpy(&u, &x, sizeof u);
-    return u;
-}
-
-float float_of(std::uint32_t u)
-{
-    float x;
-    std::memcpy(&x, &u, sizeof x);
-    return x;
-}
 
 constexpr std::uint32_t float_exponent_mask = 0x7f800000u;
 /// Float bits of 65520 = 65504 + half an ulp: from here on (the tie goes to the even

@@ -8,8 +8,23 @@
 // or beyond becomes ±inf; NaN stays NaN (quiet, the top fraction bits kept). half → float
 // is exact.
 #include <cstdint>
+#include <cstring>
 
 namespace lb::nn {
+
+/// The IEEE 754 bits of a float, and the float with those bits (std::bit_cast before C++20).
+inline std::uint32_t bits_of(float x)
+{
+    std::uint32_t u;
+    std::memcpy(&u, &x, sizeof u);
+    return u;
+}
+inline float float_of(std::uint32_t u)
+{
+    float x;
+    std::memcpy(&x, &u, sizeof x);
+    return x;
+}
 
 /// Bits of the half nearest to x (ties to even).
 std::uint16_t float_to_half(float x);

@@ -319,6 +319,24 @@ struct FormatTestNetwork {
     bool tight = true;  ///< the bound is tight enough to tell reduced weights from float32 ones
 };
 
+/// The armadillo's Table 2 decoder (BatchNorm statistics randomised) and integrator, with a
+/// random input standardizer for the integrator.
+struct Table2Networks {
+    Sequential decoder, integrator;
+    Standardizer standardizer;
+};
+Table2Networks armadillo_networks(Rng& rng)
+{
+    const auto arch = table2_architecture("armadillo");
+    Table2Networks nets;
+    nets.decoder = make_mlp(arch.decoder, rng);
+    test::randomize_batch_norm(nets.decoder, rng);
+    nets.integrator = make_mlp(arch.integrator, rng);
+    nets.standardizer = Standardizer(rng.uniform_vector(arch.integrator.in_dim, -1, 1),
+                                     rng.uniform_vector(arch.integrator.in_dim, 0.5, 2));
+    return nets;
+}
+
 /// The armadillo's Table 2 networks (the largest) whole, each of their affine ops alone (a
 /// one-Linear network with the op's folded weights, bias and activation), a small random
 /// MLP whose sizes are not whole panels, and a network with every op kind (scale, act, add,
@@ -330,11 +348,7 @@ std::vector<FormatTestNetwork> format_test_networks(Rng& rng, WeightFormat forma
 {
     std::vector<FormatTestNetwork> nets;
     const auto arch = table2_architecture("armadillo");
-    Sequential decoder = make_mlp(arch.decoder, rng);
-    test::randomize_batch_norm(decoder, rng);
-    Sequential integrator = make_mlp(arch.integrator, rng);
-    const Standardizer standardizer(rng.uniform_vector(arch.integrator.in_dim, -1, 1),
-                                    rng.uniform_vector(arch.integrator.in_dim, 0.5, 2));
+    const auto [decoder, integrator, standardizer] = armadillo_networks(rng);
     nets.push_back({"armadillo decoder", InferenceNetwork(decoder, nullptr, format), false});
     nets.push_back({"armadillo integrator", InferenceNetwork(integrator, &standardizer, format), false});
     for (std::size_t n = 0; n < 2; ++n) {
@@ -399,11 +413,7 @@ TEST(InferenceNetwork, ReducedWeightsStayCloseToFloat32)
     const std::vector<std::pair<WeightFormat, double>> limits = {{WeightFormat::f16, 3e-3}, {WeightFormat::int8, 5e-2}};
     Rng rng(92);
     const auto arch = table2_architecture("armadillo");
-    Sequential decoder = make_mlp(arch.decoder, rng);
-    test::randomize_batch_norm(decoder, rng);
-    Sequential integrator = make_mlp(arch.integrator, rng);
-    const Standardizer standardizer(rng.uniform_vector(arch.integrator.in_dim, -1, 1),
-                                    rng.uniform_vector(arch.integrator.in_dim, 0.5, 2));
+    const auto [decoder, integrator, standardizer] = armadillo_networks(rng);
     InferenceNetwork dec32(decoder), int32(integrator, &standardizer);
     for (const auto& [format, limit] : limits) {
         InferenceNetwork dec(decoder, nullptr, format), integ(integrator, &standardizer, format);
