@@ -21,6 +21,7 @@
 
 #include "latent/autoencoder.hpp"
 #include "methods/registry.hpp"
+#include "nn/weight_format.hpp"
 
 namespace lb {
 
@@ -31,6 +32,10 @@ struct MethodSpec {
     /// The entry's own `seeds = [...]`: a subset of the suite's seeds that this method runs
     /// (e.g. one seed of an expensive baseline); empty: every seed of the suite.
     std::vector<std::uint64_t> seeds;
+    /// The entry's `weights`: what its rollouts' float inference networks stream (f32, f16,
+    /// int8; methods whose uses_weight_format() is true). Not a fit option: an entry that
+    /// differs from another only in `weights` rolls out that entry's artefact, not a new fit.
+    nn::WeightFormat weights = nn::WeightFormat::f32;
 };
 
 /// What the suite's seeds vary (ExperimentConfig::seed_scope).

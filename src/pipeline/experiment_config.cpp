@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.hpp"
 
@@ -174,7 +175,17 @@ SceneSpec read_scene(ConfigTable s, const std::string& base, const AutoencoderOp
             }
             if (m.seeds.empty()) entry.fail("seeds", "list at least one seed (or leave the key out)");
         }
+        const std::string weights = entry.get_string("weights", "f32");
+        try {
+            m.weights = nn::weight_format_from_string(weights);
+        } catch (const std::invalid_argument& e) {
+            entry.fail("weights", e.what());
+        }
         m.method = registry.parse(entry, defaults);
+        if (m.weights != nn::WeightFormat::f32 && !m.method->uses_weight_format())
+            entry.fail("weights", "method '" + m.method->method_name() +
+                                      "' does not roll out through the float inference network (latent_mlp and "
+                                      "tan_physics_mlp do); leave the key out");
         sc.methods.push_back(std::move(m));
     }
     defaults.finish();  // a [training] key that no method reads is a typo

@@ -70,10 +70,11 @@ std::string method_stage_key(const Method& method, const std::string& sim_key, c
                        (version > 1 ? "|fit v" + std::to_string(version) : std::string()));
 }
 
-std::string rollout_stage_key(const std::string& method_key, const ExperimentConfig& ex)
+std::string rollout_stage_key(const std::string& method_key, const ExperimentConfig& ex, nn::WeightFormat weights)
 {
     return fnv1a64_hex(method_key + "|rollout|" + ex.sequences + "|" + std::to_string(ex.rollout_frames) + "|format " +
-                       std::to_string(kRolloutFormatVersion));
+                       std::to_string(kRolloutFormatVersion) +
+                       (weights != nn::WeightFormat::f32 ? "|weights " + nn::to_string(weights) : std::string()));
 }
 
 std::string resolve_run_dir(const ExperimentConfig& ex, const std::string& output_dir)
@@ -249,13 +250,15 @@ private:
         const std::vector<std::uint64_t>& entry_seeds =
             full_space ? m_points[p]->seeds : m_points[p]->scenes[s].methods[m].seeds;
         const std::vector<std::uint64_t>& seeds = entry_seeds.empty() ? m_points[p]->seeds : entry_seeds;
+        const nn::WeightFormat weights =
+            full_space ? nn::WeightFormat::f32 : m_points[p]->scenes[s].methods[m].weights;
         std::vector<Slot> slots;
         auto add = [&](std::optional<std::uint64_t> seed, const SceneGroup& g) {
             Slot slot;
             slot.seed = seed;
             slot.group = &g;
             slot.fit_key = method_stage_key(method, g.sim_key, g.ae_key);
-            slot.rollout_key = rollout_stage_key(slot.fit_key, *m_points[p]);
+            slot.rollout_key = rollout_stage_key(slot.fit_key, *m_points[p], weights);
             slots.push_back(slot);
         };
         // Under `[seeds] scope = "autoencoder"` a method without a seed of its own that uses
@@ -324,7 +327,14 @@ private:
         eval.level = 1;
         eval.depends_on = {g.id};
         eval.outputs = {{g.dir + "/rollouts/" + stem + ".h5", slot.rollout_key}};
-        if (method.has_artefact()) {
+        // Another entry with the same options (one that differs only in `weights`) already
+        // fits this artefact in this scene folder: roll that out rather than train it twice.
+        const std::string fit_dedupe = g.dir + "\n" + slot.fit_key;
+        if (auto it = m_fits.find(fit_dedupe); method.has_artefact() && it != m_fits.end()) {
+            eval.level = 2;
+            eval.depends_on = {it->second};
+            eval.fit_unit = it->second;
+        } else if (method.has_artefact()) {
             Unit fit = base;
             fit.id = "fit." + label + "." + stem;
             fit.kind = UnitKind::Fit;
@@ -334,6 +344,7 @@ private:
             eval.level = 2;
             eval.depends_on = {fit.id};
             eval.fit_unit = fit.id;
+            m_fits[fit_dedupe] = fit.id;
             m_units.push_back(std::move(fit));
         }
         m_planned[dedupe] = eval.id;
@@ -348,6 +359,7 @@ private:
     std::unique_ptr<Method> m_reference;
     std::vector<Unit> m_units;
     std::map<std::string, std::string> m_planned;  ///< dedupe key -> eval unit id
+    std::map<std::string, std::string> m_fits;     ///< scene folder + fit key -> fit unit id
     /// Of the scene being planned, per point: (seed or none, index of its scene group).
     std::vector<std::vector<std::pair<std::optional<std::uint64_t>, size_t>>> m_group_of;
 };

@@ -103,6 +103,7 @@ std::string simulate_key(const Scene& scene);
 std::string autoencoder_stage_key(const std::string& sim_key, const AutoencoderOptions& options);
 /// A method's artefact key (the method resolved and its seed set).
 std::string method_stage_key(const Method& method, const std::string& sim_key, const std::string& ae_key);
-std::string rollout_stage_key(const std::string& method_key, const ExperimentConfig& ex);
+std::string rollout_stage_key(const std::string& method_key, const ExperimentConfig& ex,
+                              nn::WeightFormat weights = nn::WeightFormat::f32);
 
 } // namespace lb
