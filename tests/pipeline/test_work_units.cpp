@@ -188,8 +188,12 @@ TEST(WorkUnits, AutoencoderSeedScopePlansOneAutoencoderPerSeed)
     EXPECT_EQ(plan.find("eval.cantilever_small.pca.seed4"), nullptr);
     ASSERT_NE(plan.find("eval.cantilever_small.full_space"), nullptr);
     for (const PlannedRow& row : plan.rows) {
-        if (row.name == "exact" || row.name == "ours") EXPECT_EQ(row.seeds, (std::vector<std::uint64_t>{3, 4})) << row.name;
-        if (row.name == "pca" || row.name == "full_space") EXPECT_TRUE(row.seeds.empty()) << row.name;
+        if (row.name == "exact" || row.name == "ours") {
+            EXPECT_EQ(row.seeds, (std::vector<std::uint64_t>{3, 4})) << row.name;
+        }
+        if (row.name == "pca" || row.name == "full_space") {
+            EXPECT_TRUE(row.seeds.empty()) << row.name;
+        }
     }
 
     const ExperimentPlan shared = plan_experiment(
