@@ -376,8 +376,15 @@ private:
         const Unit& su = *m_plan.find(u.scene_unit);
         in.dataset_path = su.outputs[0].file;
         if (in.autoencoder) in.autoencoder_path = su.outputs[1].file;
-        if (!u.full_space) in.weights = m_points[u.point_index]->scenes[u.scene_index].methods[u.method_index].weights;
+        in.weights = weights_of(u);
         return in;
+    }
+
+    /// The inference weights of an eval unit's entry (f32 for the reference simulator).
+    nn::WeightFormat weights_of(const Unit& u) const
+    {
+        return u.full_space ? nn::WeightFormat::f32
+                            : m_points[u.point_index]->scenes[u.scene_index].methods[u.method_index].weights;
     }
 
     void run_fit(const Unit& u)
@@ -448,10 +455,8 @@ private:
                 mr.name = row.name;
                 mr.method = method.method_name();
                 mr.summary = method.summary();
-                if (!u.full_space) {
-                    const nn::WeightFormat w = m_points[u.point_index]->scenes[u.scene_index].methods[u.method_index].weights;
-                    if (w != nn::WeightFormat::f32) mr.summary += ", " + nn::to_string(w) + " inference weights";
-                }
+                if (const nn::WeightFormat w = weights_of(u); w != nn::WeightFormat::f32)
+                    mr.summary += ", " + nn::to_string(w) + " inference weights";
                 mr.layers = method.layers();
                 mr.fit_version = method.fit_version();
                 mr.paper_method = method.is_paper_method();

@@ -157,6 +157,14 @@ TEST(WorkUnits, AutoencoderSweepPlansOneSceneUnitPerAutoencoder)
               std::vector<std::string>{"scene.cantilever_small.p00"});
 }
 
+/// The index of a CSV table's column (a test failure if it has none).
+size_t column_of(const Table& csv, const std::string& name)
+{
+    const auto at = std::find(csv.columns.begin(), csv.columns.end(), name);
+    EXPECT_NE(at, csv.columns.end()) << name;
+    return size_t(at - csv.columns.begin());
+}
+
 /// kSwept without its sweep, with fulton_full (no seed of its own, but it steps in the
 /// autoencoder) and `[seeds] values = [3, 4]` of the given scope.
 std::string seed_scope_suite(const std::string& scope)
@@ -233,11 +241,7 @@ TEST(WorkUnits, AutoencoderSeedScopeRunTrainsOneAutoencoderPerSeedAndSaysSo)
     // fulton_full's row holds one run per autoencoder
     // (read as a parser would: the exact method's label holds a quoted comma)
     const Table csv = read_csv(run_dir + "/tables/methods_cantilever_small.csv");
-    const auto column = [&](const std::string& name) {
-        const auto at = std::find(csv.columns.begin(), csv.columns.end(), name);
-        EXPECT_NE(at, csv.columns.end()) << name;
-        return size_t(at - csv.columns.begin());
-    };
+    const auto column = [&](const std::string& name) { return column_of(csv, name); };
     const size_t method = column("method"), n_seeds = column("n_seeds");
     int exact_rows = 0;
     for (const auto& row : csv.rows) {
@@ -288,11 +292,7 @@ TEST(WorkUnits, WeightsEntryRollsOutTheSameFitUnderItsOwnKey)
     const auto run = run_cli("run " + write_suite("weights_run", weights_suite(kWeightEntries)) + " -o " + run_dir);
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const Table csv = read_csv(run_dir + "/tables/rollouts_cantilever_small.csv");
-    const auto column = [&](const std::string& name) {
-        const auto at = std::find(csv.columns.begin(), csv.columns.end(), name);
-        EXPECT_NE(at, csv.columns.end()) << name;
-        return size_t(at - csv.columns.begin());
-    };
+    const auto column = [&](const std::string& name) { return column_of(csv, name); };
     const size_t method = column("method"), window = column("window");
     std::map<std::string, int> test_rows;
     for (const auto& row : csv.rows)
