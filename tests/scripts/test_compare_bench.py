@@ -5,13 +5,14 @@ whatever the ratios (report only), exit 1 on an unreadable file. Run by ctest (l
 
   /usr/bin/python3 tests/scripts/test_compare_bench.py --cli build/latentbench --tmp build/tests/tmp
 """
-import argparse
 import json
 import pathlib
 import shutil
 import subprocess
 import sys
 import unittest
+
+import script_test
 
 REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 COMPARE = REPO / "scripts" / "compare_bench.py"
@@ -96,9 +97,11 @@ class CompareBench(unittest.TestCase):
         self.assertIn("not Google Benchmark JSON", p.stderr)
 
 
+def main():
+    global ARGS
+    ARGS, rest = script_test.arguments()
+    return script_test.run(rest)
+
+
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True)
-    parser.add_argument("--tmp", required=True)
-    ARGS, rest = parser.parse_known_args()
-    unittest.main(argv=[sys.argv[0]] + rest)
+    sys.exit(main())

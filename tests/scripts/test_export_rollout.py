@@ -7,12 +7,13 @@ truth's error field is zero. Run by ctest (label unit):
 
 Exits 77 (ctest's SKIP_RETURN_CODE) with a message if meshio is not installed.
 """
-import argparse
 import os
 import shutil
 import subprocess
 import sys
 import unittest
+
+import script_test
 import xml.etree.ElementTree as ET
 
 SKIP = 77
@@ -178,12 +179,8 @@ class ExportTest(unittest.TestCase):
 
 def main():
     global ARGS
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True, help="the latentbench executable")
-    parser.add_argument("--tmp", required=True, help="a scratch folder")
-    ARGS, rest = parser.parse_known_args()
-    result = unittest.main(argv=[sys.argv[0]] + rest, exit=False, verbosity=2).result
-    return 0 if result.wasSuccessful() else 1
+    ARGS, rest = script_test.arguments()
+    return script_test.run(rest)
 
 
 if __name__ == "__main__":

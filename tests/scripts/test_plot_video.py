@@ -7,13 +7,14 @@ wide, even). Run by ctest (label unit):
 
 Exits 77 (ctest's SKIP_RETURN_CODE) with a message if ffmpeg/ffprobe is not installed.
 """
-import argparse
 import json
 import os
 import shutil
 import subprocess
 import sys
 import unittest
+
+import script_test
 
 SKIP = 77
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -117,12 +118,8 @@ class VideoTest(unittest.TestCase):
 
 def main():
     global ARGS
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True, help="the latentbench executable")
-    parser.add_argument("--tmp", required=True, help="a scratch folder")
-    ARGS, rest = parser.parse_known_args()
-    result = unittest.main(argv=[sys.argv[0]] + rest, exit=False, verbosity=2).result
-    return 0 if result.wasSuccessful() else 1
+    ARGS, rest = script_test.arguments()
+    return script_test.run(rest)
 
 
 if __name__ == "__main__":

@@ -7,13 +7,13 @@ and the repository files it names in code exist. Run by ctest (label unit):
 
   /usr/bin/python3 tests/scripts/test_readme.py --cli build/latentbench --tmp build/tests/tmp
 """
-import argparse
-import os
 import pathlib
 import re
 import subprocess
 import sys
 import unittest
+
+import script_test
 
 REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 README = REPO / "README.md"
@@ -165,13 +165,9 @@ class Readme(unittest.TestCase):
 
 def main():
     global ARGS
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True)
-    parser.add_argument("--tmp", required=True)  # the scripts tests' convention; unused here
-    ARGS, rest = parser.parse_known_args()
-    ARGS.cli = os.path.abspath(ARGS.cli)
-    unittest.main(argv=[sys.argv[0], *rest], verbosity=2)
+    ARGS, rest = script_test.arguments()
+    return script_test.run(rest)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

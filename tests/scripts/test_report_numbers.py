@@ -18,9 +18,7 @@ in progress, never in ctest).
 
   /usr/bin/python3 tests/scripts/test_report_numbers.py [--allow-unconverted] [--tmp DIR]
 """
-import argparse
 import json
-import os
 import pathlib
 import re
 import shutil
@@ -28,6 +26,8 @@ import subprocess
 import sys
 import tempfile
 import unittest
+
+import script_test
 
 REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 SCRIPT = REPO / "scripts" / "make_report.py"
@@ -295,16 +295,13 @@ class StaleTable(unittest.TestCase):
 
 def main():
     global ARGS
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--allow-unconverted", action="store_true",
-                        help="list the numbers of {{unconverted}} passages instead of failing")
-    parser.add_argument("--tmp", default=None, help="folder for temporary copies")
-    parser.add_argument("--cli", default=None, help="ignored (ctest passes it to every scripts.* test)")
-    ARGS, rest = parser.parse_known_args()
-    if ARGS.tmp:
-        os.makedirs(ARGS.tmp, exist_ok=True)
-    unittest.main(argv=[sys.argv[0], *rest], verbosity=2)
+    ARGS, rest = script_test.arguments(
+        description=__doc__.splitlines()[0], required=False,
+        extra=lambda parser: parser.add_argument(
+            "--allow-unconverted", action="store_true",
+            help="list the numbers of {{unconverted}} passages instead of failing"))
+    return script_test.run(rest)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -6,13 +6,13 @@ tables. Run by ctest (label unit):
 
   /usr/bin/python3 tests/scripts/test_run_local.py --cli build/latentbench --tmp build/tests/tmp
 """
-import argparse
-import os
 import pathlib
 import shutil
 import subprocess
 import sys
 import unittest
+
+import script_test
 
 REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 RUN_LOCAL = REPO / "scripts" / "run_local.py"
@@ -83,13 +83,9 @@ class RunLocal(unittest.TestCase):
 
 def main():
     global ARGS
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True)
-    parser.add_argument("--tmp", required=True)
-    ARGS, rest = parser.parse_known_args()
-    ARGS.cli = os.path.abspath(ARGS.cli)
-    unittest.main(argv=[sys.argv[0], *rest], verbosity=2)
+    ARGS, rest = script_test.arguments()
+    return script_test.run(rest)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

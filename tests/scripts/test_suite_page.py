@@ -14,7 +14,6 @@ browser):
 Exits 77 (ctest's SKIP_RETURN_CODE) with a message if chromium, chromedriver, selenium or
 ffmpeg is missing.
 """
-import argparse
 import base64
 import os
 import re
@@ -24,6 +23,8 @@ import sys
 import tempfile
 import time
 import unittest
+
+import script_test
 import urllib.parse
 
 SKIP = 77
@@ -290,16 +291,11 @@ class SuitePageTest(unittest.TestCase):
 
 def main():
     global ARGS
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True)
-    parser.add_argument("--tmp", required=True)
-    parser.add_argument("--artefacts", help="where the screenshot goes (default: <tmp>/browser)")
-    ARGS, rest = parser.parse_known_args()
-    ARGS.cli = os.path.abspath(ARGS.cli)
-    ARGS.tmp = os.path.abspath(ARGS.tmp)
+    ARGS, rest = script_test.arguments(extra=lambda parser: parser.add_argument(
+        "--artefacts", help="where the screenshot goes (default: <tmp>/browser)"))
     ARGS.artefacts = os.path.abspath(ARGS.artefacts or os.path.join(ARGS.tmp, "browser"))
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=2)
+    return script_test.run(rest)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -5,7 +5,6 @@ table compares equal with its thinned copy and unequal when a kept cell moved. R
 
   /usr/bin/python3 tests/scripts/test_training_table.py --cli build/latentbench --tmp build/tests/tmp
 """
-import argparse
 import csv
 import io
 import pathlib
@@ -13,6 +12,8 @@ import shutil
 import subprocess
 import sys
 import unittest
+
+import script_test
 
 REPO = pathlib.Path(__file__).resolve().parent.parent.parent
 sys.path.insert(0, str(REPO / "scripts"))
@@ -90,9 +91,11 @@ class TrainingTable(unittest.TestCase):
         self.assertIn("training_s.csv row", p.stdout)
 
 
+def main():
+    global ARGS
+    ARGS, rest = script_test.arguments()
+    return script_test.run(rest)
+
+
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--cli", required=True)
-    parser.add_argument("--tmp", required=True)
-    ARGS, rest = parser.parse_known_args()
-    unittest.main(argv=[sys.argv[0]] + rest)
+    sys.exit(main())
