@@ -45,6 +45,10 @@ struct MethodResult {
     /// Parallel to `budgets`: each fit's loss per epoch (empty: nothing trained, or an
     /// artefact written before curves were recorded). pipeline/training_curves.hpp.
     std::vector<nn::TrainingCurves> curves;
+    /// The row whose fits this row rolls out when it has none of its own (an entry that
+    /// differs from it only in `weights`): its curves are that row's, so the training
+    /// table lists them once. "" for a row with its own fits.
+    std::string fit_of;
     /// The sweep point of this row ("training.noise_fraction=0.05, seeds=1"); "" for a
     /// row shared by every point, or without a [sweep].
     std::string point;

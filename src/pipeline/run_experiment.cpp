@@ -463,8 +463,11 @@ private:
                 mr.rollout_file = u.outputs[0].file;
                 mr.rollout_key = u.outputs[0].key;
                 mr.point = row.point_text;
-                if (!u.fit_unit.empty())
-                    mr.embeddings = load_embedding_metrics(h5::File::open(m_plan.find(u.fit_unit)->outputs[0].file));
+                if (!u.fit_unit.empty()) {
+                    const Unit& fit = *m_plan.find(u.fit_unit);
+                    mr.embeddings = load_embedding_metrics(h5::File::open(fit.outputs[0].file));
+                    if (fit.method != u.method) mr.fit_of = fit.method;
+                }
             }
             std::vector<RolloutSummary> summaries;
             for (const RolloutRecord& rec : load_rollout_summaries(u.outputs[0].file)) {

@@ -39,9 +39,13 @@ Table training_curves_table(const SceneResult& r)
                 "with itself across seeds, not methods with each other.";
     t.columns = {"method", "seed", "stage", "epoch", "train_loss", "validation_loss"};
     add_rows(t, "autoencoder", TableCell::integer((long long)r.autoencoder_seed), r.autoencoder_curves);
-    std::string without;
+    std::string without, shared;
     for (const MethodResult& m : r.methods) {
         const std::string name = m.point.empty() ? m.name : m.name + " [" + m.point + "]";
+        if (!m.fit_of.empty()) {  // another row's fits: their curves are listed under that row
+            shared += (shared.empty() ? "" : ", ") + name + " (" + m.fit_of + ")";
+            continue;
+        }
         bool missing = false;
         for (std::size_t k = 0; k < m.curves.size(); ++k) {
             const TableCell seed = m.seeds.size() == m.curves.size() ? TableCell::integer((long long)m.seeds[k])
@@ -57,6 +61,8 @@ Table training_curves_table(const SceneResult& r)
     if (!without.empty())
         t.add_note("no curve recorded (files made before curves were stored; refit with --force to get one): " +
                    without);
+    if (!shared.empty())
+        t.add_note("rows that roll out another row's fits, whose curves are that row's (listed once): " + shared);
     t.add_note("seed empty: the method ran once with its own seed (no `seeds` list); validation_loss empty: the "
                "stage has no validation split; nan: an epoch of a run resumed from a checkpoint that recorded no "
                "curve");

@@ -307,6 +307,15 @@ TEST(WorkUnits, WeightsEntryRollsOutTheSameFitUnderItsOwnKey)
               read_all(run_dir + "/cantilever_small/rollouts/ours_f16.h5"));
     EXPECT_FALSE(fs::exists(run_dir + "/cantilever_small/integrators/ours_f16.h5"));
     EXPECT_NE(read_all(run_dir + "/tables/methods_cantilever_small.md").find("f16 inference weights"), std::string::npos);
+    // The shared fit's loss curve appears once, under the row that owns the fit.
+    const Table curves = read_csv(run_dir + "/tables/training_cantilever_small.csv");
+    std::map<std::string, int> curve_rows;
+    for (const auto& row : curves.rows) ++curve_rows[row.at(column_of(curves, "method")).text];
+    EXPECT_GT(curve_rows["ours"], 0);
+    EXPECT_EQ(curve_rows.count("ours_f16"), 0u);
+    EXPECT_EQ(curve_rows.count("ours_int8"), 0u);
+    EXPECT_NE(read_all(run_dir + "/tables/training_cantilever_small.csv").find("ours_f16 (ours), ours_int8 (ours)"),
+              std::string::npos);
 
     struct Case {
         const char* entries;
