@@ -14,6 +14,8 @@
 
 #include "core/error.hpp"
 
+#include <omp.h>
+
 namespace lb {
 
 namespace {
@@ -117,6 +119,34 @@ private:
     size_t m_cached = 0;                                    ///< bytes in m_free
 };
 
+/// CHOLMOD's own OpenMP loops run serially while this lives. Debian's CHOLMOD (SuiteSparse
+/// 5.12) opens a region of num_threads(CHOLMOD_OMP_NUM_THREADS = 4) for every large
+/// supernode, to zero and scatter it: thousands of fork/joins per factorisation, four
+/// threads on a 2-core machine. On the full armadillo (10k DOFs, 0.17 GFLOP per
+/// factorisation) the numeric factorisation took 122 ms with them and 20-25 ms without,
+/// and a full-space step 226-297 ms against 132 ms (bench sim_phase/armadillo/factorize,
+/// sim_step/armadillo, 2026-12-07, with the command line's thread environment). The BLAS
+/// inside is untouched (one thread under the command line's OPENBLAS_NUM_THREADS=1).
+/// libgomp keeps max-active-levels in one global, so only the initial thread outside any
+/// parallel region changes it (inside one, CHOLMOD's regions are nested, and libgomp runs
+/// nested regions on one thread unless nesting is enabled).
+class SerialOpenMp {
+public:
+    SerialOpenMp() : m_levels(omp_in_parallel() ? -1 : omp_get_max_active_levels())
+    {
+        if (m_levels > 0) omp_set_max_active_levels(0);
+    }
+    ~SerialOpenMp()
+    {
+        if (m_levels > 0) omp_set_max_active_levels(m_levels);
+    }
+    SerialOpenMp(const SerialOpenMp&) = delete;
+    SerialOpenMp& operator=(const SerialOpenMp&) = delete;
+
+private:
+    int m_levels;
+};
+
 } // namespace
 
 struct SparseCholesky::Impl {
@@ -152,7 +182,10 @@ SparseCholesky::~SparseCholesky() = default;
 
 void SparseCholesky::analyze(const SparseMatrixd& lower)
 {
-    m_impl->llt.analyzePattern(lower);
+    {
+        const SerialOpenMp serial;
+        m_impl->llt.analyzePattern(lower);
+    }
     if (m_impl->llt.info() != Eigen::Success) {
         throw NumericalError("CHOLMOD symbolic analysis failed");
     }
@@ -169,7 +202,10 @@ FactorStatus SparseCholesky::factorize(const SparseMatrixd& lower)
             return FactorStatus::Fatal;
         }
     }
-    m_impl->llt.factorize(lower);
+    {
+        const SerialOpenMp serial;
+        m_impl->llt.factorize(lower);
+    }
     switch (m_impl->llt.info()) {
     case Eigen::Success:
         m_message.clear();
@@ -183,12 +219,16 @@ FactorStatus SparseCholesky::factorize(const SparseMatrixd& lower)
     }
 }
 
+double SparseCholesky::factor_nonzeros() const { return m_analyzed ? m_impl->llt.cholmod().lnz : 0.0; }
+double SparseCholesky::factorization_flops() const { return m_analyzed ? m_impl->llt.cholmod().fl : 0.0; }
+
 VectorXd SparseCholesky::solve(const VectorXd& b) const { return m_impl->llt.solve(b); }
 
 void SparseCholesky::solve(const VectorXd& b, VectorXd& x)
 {
     Impl& impl = *m_impl;
     cholmod_dense rhs = Eigen::viewAsCholmod(const_cast<VectorXd&>(b));
+    const SerialOpenMp serial;
     if (!cholmod_solve2(CHOLMOD_A, impl.llt.factor(), &rhs, nullptr, &impl.x, nullptr, &impl.y, &impl.e,
                         &impl.llt.cholmod()))
         throw NumericalError("CHOLMOD solve failed (status " + std::to_string(impl.llt.cholmod().status) + ")");

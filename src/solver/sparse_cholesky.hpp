@@ -35,6 +35,10 @@ public:
     /// calls, so a solve of the same size allocates nothing.
     void solve(const VectorXd& b, VectorXd& x);
     const std::string& message() const { return m_message; }
+    /// CHOLMOD's figures for the analysed pattern (0 before analyze()): the factor's
+    /// non-zeros and the floating-point operations of one numeric factorisation.
+    double factor_nonzeros() const;
+    double factorization_flops() const;
     bool analyzed() const { return m_analyzed; }
 
 private:

@@ -1,63 +1,151 @@
 // One full-space implicit-Euler step per scene (Table 1's "Simulation" column):
 //   sim_step/<scene>         the full-size scene (the paper's Table 1 row)
 //   sim_step/<scene>_small   its small variant
+//   sim_phase/<scene>/<phase>  the full-size armadillo's and bunny's step taken apart, at a
+//                            mid-rollout state: assemble (the exact Hessian over the free
+//                            DOFs), factorize (CHOLMOD's numeric LLᵀ, analysis reused), solve
+//                            (one triangular solve pair), value_gradient (one line-search
+//                            evaluation); where a step's time goes (a step costs about
+//                            newton_it × (assemble + factorize + solve) plus the line search)
 // scripts/make_report.py performance sets the full-size rows beside the paper's column. Each iteration advances the simulation by one frame of
 // the scene's first sequence (after a few warm-up frames), so the measured
 // steps are real dynamic steps. Counters: Newton iterations per step, DOFs,
-// Hessian non-zeros. Full-size Armadillo/Bunny need scripts/prepare_meshes.
+// Hessian non-zeros, and sys_share, the process's kernel CPU time over the loop's wall
+// time (page faults, thread wake-ups: issue 41's "sys time under 10 % of wall").
+// Full-size Armadillo/Bunny need scripts/prepare_meshes.
 #include "lb_paths.hpp"
 #include <benchmark/benchmark.h>
 
+#include <sys/resource.h>
+
+#include <chrono>
 #include <filesystem>
 #include <memory>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "sim/full_space_simulator.hpp"
+#include "solver/sparse_cholesky.hpp"
 
 namespace lb {
 namespace {
 
-void sim_step(benchmark::State& state, const std::string& scene_name, const std::string& variant)
+/// The process's kernel CPU time so far, in seconds.
+double system_seconds()
 {
-    set_log_level(LogLevel::Quiet);
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_stime.tv_usec);
+}
+
+/// A scene's full-space simulation, stepped along its first sequence.
+struct Stepper {
     std::unique_ptr<Scene> scene;
-    try {
-        scene = std::make_unique<Scene>(
-            load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene_name + ".toml", {variant}));
-    } catch (const Error& e) {
-        state.SkipWithError(e.what());
-        return;
-    }
-    const PhysicsModel model(physics_spec(*scene));
-    FullSpaceSimulator sim(model, scene->newton);
-    const SequenceSpec& seq = scene->sequences.front();
-    const BoundaryTrajectory traj = scene->trajectory(seq);
-    VectorXd x_prev2 = model.rest_state(), x_prev = x_prev2, x;
-    constexpr int kWarmup = 5;
+    std::unique_ptr<PhysicsModel> model;
+    std::unique_ptr<FullSpaceSimulator> sim;
+    BoundaryTrajectory traj;
+    int frames = 0;
+    VectorXd x_prev2, x_prev, x;
     int t = 1;
-    auto advance = [&]() {
-        const SolveSummary s = sim.step(x_prev, x_prev2, traj.targets[size_t(t)], x);
+
+    /// nullptr (with the state's error set) when the scene does not load.
+    static std::unique_ptr<Stepper> make(benchmark::State& state, const std::string& scene_name,
+                                         const std::string& variant)
+    {
+        set_log_level(LogLevel::Quiet);
+        auto s = std::make_unique<Stepper>();
+        try {
+            s->scene = std::make_unique<Scene>(
+                load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene_name + ".toml", {variant}));
+        } catch (const Error& e) {
+            state.SkipWithError(e.what());
+            return nullptr;
+        }
+        s->model = std::make_unique<PhysicsModel>(physics_spec(*s->scene));
+        s->sim = std::make_unique<FullSpaceSimulator>(*s->model, s->scene->newton);
+        const SequenceSpec& seq = s->scene->sequences.front();
+        s->traj = s->scene->trajectory(seq);
+        s->frames = seq.frames;
+        s->x_prev2 = s->model->rest_state();
+        s->x_prev = s->x_prev2;
+        return s;
+    }
+    SolveSummary advance()
+    {
+        const SolveSummary s = sim->step(x_prev, x_prev2, traj.targets[size_t(t)], x);
         x_prev2.swap(x_prev);
         x_prev = x;
-        t = t + 1 < seq.frames ? t + 1 : 1;
+        t = t + 1 < frames ? t + 1 : 1;
         return s;
-    };
-    for (int i = 0; i < kWarmup; ++i) advance();
+    }
+};
+
+constexpr int kWarmup = 5;
+
+void sim_step(benchmark::State& state, const std::string& scene_name, const std::string& variant)
+{
+    const std::unique_ptr<Stepper> s = Stepper::make(state, scene_name, variant);
+    if (!s) return;
+    for (int i = 0; i < kWarmup; ++i) s->advance();
     long iterations = 0, steps = 0;
+    const double sys0 = system_seconds();
+    const auto wall0 = std::chrono::steady_clock::now();
     for (auto _ : state) {
-        const SolveSummary s = advance();
-        if (!s.converged()) {
-            state.SkipWithError(("Newton failed: " + s.brief()).c_str());
+        const SolveSummary r = s->advance();
+        if (!r.converged()) {
+            state.SkipWithError(("Newton failed: " + r.brief()).c_str());
             break;
         }
-        iterations += s.iterations;
+        iterations += r.iterations;
         ++steps;
-        benchmark::DoNotOptimize(x.data());
+        benchmark::DoNotOptimize(s->x.data());
     }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     state.counters["newton_it"] = steps ? double(iterations) / double(steps) : 0.0;
-    state.counters["dofs"] = double(model.num_dofs());
-    state.counters["nnz"] = double(sim.newton().assembler().matrix().nonZeros());
+    state.counters["dofs"] = double(s->model->num_dofs());
+    state.counters["nnz"] = double(s->sim->newton().assembler().matrix().nonZeros());
+    state.counters["sys_share"] = wall > 0.0 ? (system_seconds() - sys0) / wall : 0.0;
+}
+
+enum class Phase { Assemble, Factorize, Solve, ValueGradient };
+
+void sim_phase(benchmark::State& state, const std::string& scene_name, Phase phase)
+{
+    const std::unique_ptr<Stepper> s = Stepper::make(state, scene_name, "");
+    if (!s) return;
+    for (int i = 0; i < kWarmup; ++i) s->advance();
+    // The last step's potential at its solution: the state a Newton iteration sees.
+    const EnergySum& terms = s->sim->potential().terms();
+    HessianAssembler assembler(s->model->dof_to_unknown(), terms);
+    assembler.assemble(terms, s->x, false);
+    SparseCholesky cholesky;
+    cholesky.analyze(assembler.matrix());
+    if (cholesky.factorize(assembler.matrix()) != FactorStatus::Success) {
+        state.SkipWithError(("factorisation failed: " + cholesky.message()).c_str());
+        return;
+    }
+    const VectorXd b = VectorXd::Ones(assembler.num_unknowns());
+    VectorXd dx, g(s->x.size());
+    const double sys0 = system_seconds();
+    const auto wall0 = std::chrono::steady_clock::now();
+    for (auto _ : state) {
+        switch (phase) {
+        case Phase::Assemble: assembler.assemble(terms, s->x, false); break;
+        case Phase::Factorize: benchmark::DoNotOptimize(cholesky.factorize(assembler.matrix())); break;
+        case Phase::Solve: cholesky.solve(b, dx); break;
+        case Phase::ValueGradient: benchmark::DoNotOptimize(terms.value_gradient(s->x, g)); break;
+        }
+        benchmark::ClobberMemory();
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    state.counters["nnz"] = double(assembler.matrix().nonZeros());
+    state.counters["sys_share"] = wall > 0.0 ? (system_seconds() - sys0) / wall : 0.0;
+    if (phase == Phase::Factorize) {
+        state.counters["factor_nnz"] = cholesky.factor_nonzeros();
+        // over wall time (Google Benchmark's rates divide by the main thread's CPU time)
+        state.counters["GFLOP_per_s"] =
+            wall > 0.0 ? 1e-9 * cholesky.factorization_flops() * double(state.iterations()) / wall : 0.0;
+    }
 }
 
 #define LB_SCENE_BENCH(name)                                                                            \
@@ -70,6 +158,18 @@ LB_SCENE_BENCH(rods_translate);
 LB_SCENE_BENCH(rods_rotate);
 LB_SCENE_BENCH(armadillo);
 LB_SCENE_BENCH(bunny_ears);
+
+#define LB_PHASE_BENCH(scene, phase, value)                                                            \
+    BENCHMARK_CAPTURE(sim_phase, scene##_##phase, #scene, value)                                          \
+        ->Name("sim_phase/" #scene "/" #phase)->Unit(benchmark::kMillisecond)->MinTime(1.0)
+#define LB_PHASES(scene)                                     \
+    LB_PHASE_BENCH(scene, assemble, Phase::Assemble);        \
+    LB_PHASE_BENCH(scene, factorize, Phase::Factorize);      \
+    LB_PHASE_BENCH(scene, solve, Phase::Solve);              \
+    LB_PHASE_BENCH(scene, value_gradient, Phase::ValueGradient)
+
+LB_PHASES(armadillo);
+LB_PHASES(bunny_ears);
 
 } // namespace
 } // namespace lb
