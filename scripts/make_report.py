@@ -516,7 +516,7 @@ def load_bench(path):
         family = name.split("/")[0]
         entry = {"real_time": real, "cpu_time": cpu, "unit": unit, "family": family,
                  "error": b.get("error_message", "error") if b.get("error_occurred") else None,
-                 "counters": {k: b[k] for k in ("dofs", "newton_it") if isinstance(b.get(k), (int, float))}}
+                 "counters": {k: b[k] for k in ("dofs", "newton_it", "sys_share") if isinstance(b.get(k), (int, float))}}
         if b.get("run_type") == "aggregate":
             if b.get("aggregate_name") == "median":
                 rows[name] = dict(entry, repetitions=b.get("repetitions"), source="median")
@@ -615,6 +615,64 @@ def render_table1(rows):
     return "".join(out)
 
 
+# Issue 41's targets: (what, benchmark, bound, how the figure compares). Each is read from
+# one file's rows; a target whose benchmark is missing or failed says so.
+STEP_TARGETS = [
+    ("Full-space step, armadillo", "sim_step/armadillo", 68.0,
+     "twice the paper's 136.8 ms (Li et al. 2025, Table 1)"),
+    ("Full-space step, bunny ears", "sim_step/bunny_ears", 56.0,
+     "twice the paper's 112.6 ms (Li et al. 2025, Table 1)"),
+]
+
+
+def render_targets(rows, context):
+    """The performance targets the figures of this file meet or miss, or "" if it has none."""
+    if not bench_row(rows, "sim_step/armadillo") and not bench_row(rows, "nn/frame/f16/armadillo"):
+        return ""
+    out = ["\n### Targets\n\n"
+           "Each target against this file's figure (median real time). Threads: the file's "
+           f"`OMP_WAIT_POLICY` = {context.get('omp_wait_policy', 'not recorded')}, "
+           f"`OPENBLAS_NUM_THREADS` = {context.get('openblas_num_threads', 'not recorded')} "
+           "(the command line's own settings are PASSIVE and 1).\n\n"
+           "| target | benchmark | figure | bound | verdict |\n|:--|:--|--:|--:|:--|\n"]
+
+    def figure(name):
+        row = bench_row(rows, name)
+        if row is None:
+            return None, "not in this file"
+        if row["error"]:
+            return None, "did not run"
+        return row, None
+
+    for what, name, bound, why in STEP_TARGETS:
+        row, missing = figure(name)
+        if missing:
+            out.append(f"| {what} ({why}) | `{name}` | {missing} | ≤ {sig(bound, 3)} ms | not measured |\n")
+            continue
+        ms = row["real_time"] * UNIT_MS[row["unit"]]
+        out.append(f"| {what} ({why}) | `{name}` | {sig(ms, 4)} ms | ≤ {sig(bound, 3)} ms | "
+                   f"{'met' if ms <= bound else f'not met ({sig(ms / bound, 3)}× the bound)'} |\n")
+        share = row["counters"].get("sys_share")
+        if share is not None:
+            out.append(f"| {what}: kernel time | `{name}`, counter `sys_share` | {sig(100 * share, 3)} % of wall | "
+                       f"< 10 % | {'met' if share < 0.10 else 'not met'} |\n")
+    for fmt in ("f16", "int8"):
+        frame, missing = figure(f"nn/frame/{fmt}/armadillo")
+        bound, missing_bound = figure(f"nn/gemv_bound/packed_{fmt}/armadillo")
+        name = f"`nn/frame/{fmt}/armadillo` over `nn/gemv_bound/packed_{fmt}/armadillo`"
+        if missing or missing_bound:
+            out.append(f"| Inference, armadillo, {fmt} weights, near its streaming bound | {name} | "
+                       f"{missing or missing_bound} | ≤ 1.2× | not measured |\n")
+            continue
+        ratio = (frame["real_time"] * UNIT_MS[frame["unit"]]) / (bound["real_time"] * UNIT_MS[bound["unit"]])
+        out.append(f"| Inference, armadillo, {fmt} weights, near its streaming bound | {name} | {sig(ratio, 3)}× | "
+                   f"≤ 1.2× | {'met' if ratio <= 1.2 else 'not met'} |\n")
+    for what in ("Inference, armadillo, batch 1: ≥ 10× PyTorch eager float32",
+                 "Training epoch, full cantilever and armadillo: ≥ 10× the same loop in PyTorch"):
+        out.append(f"| {what} | – | no PyTorch timing in this file | – | not measured |\n")
+    return "".join(out)
+
+
 def render_performance(root):
     bench_dir = os.path.join(root, "results", "bench")
     files = sorted(f for f in os.listdir(bench_dir) if f.endswith(".json")) if os.path.isdir(bench_dir) else []
@@ -638,10 +696,14 @@ def render_performance(root):
             facts.append("load average: " + ", ".join(f"{x:.2f}" for x in ctx["load_avg"]))
         if "library_build_type" in ctx:
             facts.append(f"Google Benchmark library build: {ctx['library_build_type']}")
+        for key in ("omp_wait_policy", "openblas_num_threads"):
+            if key in ctx:
+                facts.append(f"{key.upper()}: {ctx[key]}")
         if "executable" in ctx:
             facts.append(f"executable: `{ctx['executable']}`")
         parts.append("".join(f"- {x}\n" for x in facts))
         parts.append(render_table1(data["rows"]))
+        parts.append(render_targets(data["rows"], ctx))
         families = {}
         for name, row in data["rows"].items():
             families.setdefault(row["family"], []).append((name, row))
