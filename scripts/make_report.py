@@ -696,7 +696,7 @@ def render_performance(root):
             facts.append("load average: " + ", ".join(f"{x:.2f}" for x in ctx["load_avg"]))
         if "library_build_type" in ctx:
             facts.append(f"Google Benchmark library build: {ctx['library_build_type']}")
-        for key in ("omp_wait_policy", "openblas_num_threads"):
+        for key in ("omp_wait_policy", "openblas_num_threads", "other_jobs"):
             if key in ctx:
                 facts.append(f"{key.upper()}: {ctx[key]}")
         if "executable" in ctx:
