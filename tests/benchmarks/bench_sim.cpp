@@ -38,6 +38,25 @@ double system_seconds()
     return double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_stime.tv_usec);
 }
 
+/// Wall time and kernel CPU time from construction: a timed loop's sys_share counter.
+class LoopClock {
+public:
+    double wall_seconds() const
+    {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - m_wall0).count();
+    }
+    /// Kernel CPU time over wall time since construction (0 if no time passed).
+    double sys_share() const
+    {
+        const double wall = wall_seconds();
+        return wall > 0.0 ? (system_seconds() - m_sys0) / wall : 0.0;
+    }
+
+private:
+    double m_sys0 = system_seconds();
+    std::chrono::steady_clock::time_point m_wall0 = std::chrono::steady_clock::now();
+};
+
 /// A scene's full-space simulation, stepped along its first sequence.
 struct Stepper {
     std::unique_ptr<Scene> scene;
@@ -48,7 +67,9 @@ struct Stepper {
     VectorXd x_prev2, x_prev, x;
     int t = 1;
 
-    /// nullptr (with the state's error set) when the scene does not load.
+    static constexpr int kWarmup = 5;
+
+    /// After kWarmup steps; nullptr (with the state's error set) when the scene does not load.
     static std::unique_ptr<Stepper> make(benchmark::State& state, const std::string& scene_name,
                                          const std::string& variant)
     {
@@ -68,6 +89,7 @@ struct Stepper {
         s->frames = seq.frames;
         s->x_prev2 = s->model->rest_state();
         s->x_prev = s->x_prev2;
+        for (int i = 0; i < kWarmup; ++i) s->advance();
         return s;
     }
     SolveSummary advance()
@@ -80,16 +102,12 @@ struct Stepper {
     }
 };
 
-constexpr int kWarmup = 5;
-
 void sim_step(benchmark::State& state, const std::string& scene_name, const std::string& variant)
 {
     const std::unique_ptr<Stepper> s = Stepper::make(state, scene_name, variant);
     if (!s) return;
-    for (int i = 0; i < kWarmup; ++i) s->advance();
     long iterations = 0, steps = 0;
-    const double sys0 = system_seconds();
-    const auto wall0 = std::chrono::steady_clock::now();
+    const LoopClock clock;
     for (auto _ : state) {
         const SolveSummary r = s->advance();
         if (!r.converged()) {
@@ -100,11 +118,10 @@ void sim_step(benchmark::State& state, const std::string& scene_name, const std:
         ++steps;
         benchmark::DoNotOptimize(s->x.data());
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     state.counters["newton_it"] = steps ? double(iterations) / double(steps) : 0.0;
     state.counters["dofs"] = double(s->model->num_dofs());
     state.counters["nnz"] = double(s->sim->newton().assembler().matrix().nonZeros());
-    state.counters["sys_share"] = wall > 0.0 ? (system_seconds() - sys0) / wall : 0.0;
+    state.counters["sys_share"] = clock.sys_share();
 }
 
 enum class Phase { Assemble, Factorize, Solve, ValueGradient };
@@ -113,7 +130,6 @@ void sim_phase(benchmark::State& state, const std::string& scene_name, Phase pha
 {
     const std::unique_ptr<Stepper> s = Stepper::make(state, scene_name, "");
     if (!s) return;
-    for (int i = 0; i < kWarmup; ++i) s->advance();
     // The last step's potential at its solution: the state a Newton iteration sees.
     const EnergySum& terms = s->sim->potential().terms();
     HessianAssembler assembler(s->model->dof_to_unknown(), terms);
@@ -126,8 +142,7 @@ void sim_phase(benchmark::State& state, const std::string& scene_name, Phase pha
     }
     const VectorXd b = VectorXd::Ones(assembler.num_unknowns());
     VectorXd dx, g(s->x.size());
-    const double sys0 = system_seconds();
-    const auto wall0 = std::chrono::steady_clock::now();
+    const LoopClock clock;
     for (auto _ : state) {
         switch (phase) {
         case Phase::Assemble: assembler.assemble(terms, s->x, false); break;
@@ -137,14 +152,13 @@ void sim_phase(benchmark::State& state, const std::string& scene_name, Phase pha
         }
         benchmark::ClobberMemory();
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     state.counters["nnz"] = double(assembler.matrix().nonZeros());
-    state.counters["sys_share"] = wall > 0.0 ? (system_seconds() - sys0) / wall : 0.0;
+    state.counters["sys_share"] = clock.sys_share();
     if (phase == Phase::Factorize) {
         state.counters["factor_nnz"] = cholesky.factor_nonzeros();
         // over wall time (Google Benchmark's rates divide by the main thread's CPU time)
         state.counters["GFLOP_per_s"] =
-            wall > 0.0 ? 1e-9 * cholesky.factorization_flops() * double(state.iterations()) / wall : 0.0;
+            1e-9 * cholesky.factorization_flops() * double(state.iterations()) / clock.wall_seconds();
     }
 }
 
