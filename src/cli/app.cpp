@@ -78,6 +78,7 @@ void configure_app(CLI::App& app)
     register_run(app);
     register_train_ae(app);
     register_plan(app);
+    register_status(app);
     register_submit(app);
     register_regress(app);
     register_page(app);

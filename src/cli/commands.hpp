@@ -25,6 +25,7 @@ void register_evaluate(CLI::App& app);
 void register_run(CLI::App& app);
 void register_train_ae(CLI::App& app);
 void register_plan(CLI::App& app);
+void register_status(CLI::App& app);
 void register_submit(CLI::App& app);
 void register_regress(CLI::App& app);
 void register_page(CLI::App& app);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <numeric>
@@ -323,6 +324,32 @@ double EpochRunner::run(int epoch)
         m_adam.step();
     }
     return weighted / double(m_bounds.back());
+}
+
+std::optional<CheckpointProgress> read_checkpoint_progress(const std::string& path)
+{
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec) || H5Fis_hdf5(path.c_str()) <= 0) return std::nullopt;
+    try {
+        const h5::File f = h5::File::open(path);
+        if (!f.has_attribute("/", "format") ||
+            f.attribute_string("/", "format").rfind("latentbench.training_checkpoint/", 0) != 0 ||
+            !f.has_attribute("/", "epoch"))
+            return std::nullopt;
+        CheckpointProgress p;
+        p.epoch = int(f.attribute_int("/", "epoch"));
+        if (f.has_attribute("/", kTrainerKey)) p.trainer = f.attribute_string("/", kTrainerKey);
+        if (f.has_attribute("/", "train_seconds"))
+            p.seconds = std::strtod(f.attribute_string("/", "train_seconds").c_str(), nullptr);
+        if (f.has_attribute("/", "fingerprint.options")) {
+            const std::string options = ";" + f.attribute_string("/", "fingerprint.options");
+            const std::size_t at = options.find(";epochs=");
+            if (at != std::string::npos) p.epochs = std::atoi(options.c_str() + at + 8);
+        }
+        return p;
+    } catch (const Error&) {
+        return std::nullopt;
+    }
 }
 
 TrainingLoopSummary run_training_loop(Learner& learner, const TrainingLoopOptions& o, const Fingerprint& fingerprint)

@@ -30,6 +30,7 @@
 // a pre-empted or interrupted run loses no finished epoch.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -158,6 +159,19 @@ private:
     std::vector<Index> m_order;
     std::vector<Index> m_batch;  ///< the current batch's sample indices (kept: no allocation per epoch)
 };
+
+/// A training checkpoint's account of its run's progress (`latentbench status`).
+struct CheckpointProgress {
+    std::string trainer;  ///< e.g. "autoencoder", "latent integrator" ("" if not recorded)
+    int epoch = 0;        ///< epochs completed
+    int epochs = 0;       ///< the budget, from the fingerprint's options ("epochs="; 0 if absent)
+    double seconds = -1;  ///< wall-clock training seconds so far, earlier processes included (< 0: not recorded)
+};
+
+/// The progress recorded in the checkpoint `path` (its attributes only; nothing is
+/// resumed or changed); nullopt if there is no file or it is not a readable training
+/// checkpoint.
+std::optional<CheckpointProgress> read_checkpoint_progress(const std::string& path);
 
 /// Train `learner`; `fingerprint` identifies everything the numbers depend on (nn/checkpoint.hpp).
 /// Throws NumericalError if the loss becomes non-finite.

@@ -108,6 +108,21 @@ bool unit_output_current(const UnitOutput& output)
     return key == output.key;
 }
 
+std::string unit_status_path(const std::string& run_dir, const std::string& id)
+{
+    return run_dir + "/units/" + id + ".status";
+}
+
+std::string unit_checkpoint_path(const Unit& unit)
+{
+    switch (unit.kind) {
+    case UnitKind::Scene: return unit.scene_dir + "/ae.checkpoint.h5";
+    case UnitKind::Fit: return unit.scene_dir + "/integrators/" + unit.stem + ".checkpoint.h5";
+    case UnitKind::Eval: break;
+    }
+    return "";
+}
+
 bool unit_complete(const Unit& unit)
 {
     return std::all_of(unit.outputs.begin(), unit.outputs.end(), unit_output_current);

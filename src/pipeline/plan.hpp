@@ -88,6 +88,14 @@ std::unique_ptr<Method> reference_method();
 /// The manifest: one JSON object per line and unit (README, "Running on a cluster").
 std::string manifest_jsonl(const ExperimentConfig& ex, const ExperimentPlan& plan);
 
+/// `<run_dir>/units/<id>.status`, where a unit records how its last run went
+/// (run_experiment.cpp writes it; `latentbench status` and the merge read it).
+std::string unit_status_path(const std::string& run_dir, const std::string& id);
+/// The training checkpoint a unit writes while it trains: a scene unit's autoencoder
+/// (`<scene_dir>/ae.checkpoint.h5`), a fit unit's method
+/// (`<scene_dir>/integrators/<stem>.checkpoint.h5`); "" for an eval unit.
+std::string unit_checkpoint_path(const Unit& unit);
+
 /// True if every output of `unit` exists with its key.
 bool unit_complete(const Unit& unit);
 /// True if `output` exists with its key (its `.key` sidecar).

@@ -12,6 +12,7 @@
 #include "core/log.hpp"
 #include "core/parse.hpp"
 #include "core/parallel.hpp"
+#include "core/stop_signal.hpp"
 #include "core/timer.hpp"
 #include "eval/diagnose.hpp"
 #include "eval/rollout.hpp"
@@ -87,9 +88,11 @@ struct LoadedScene {
     AutoencoderOptions ae_options;
 };
 
-/// `<run_dir>/units/<id>.status`: "running", "done" or "failed", then details. It tells
-/// a merge why a unit has no outputs; the outputs' keys alone say whether it completed.
-std::string status_path(const std::string& run_dir, const std::string& id) { return run_dir + "/units/" + id + ".status"; }
+/// `<run_dir>/units/<id>.status` (unit_status_path): "running", "done", "failed" or
+/// "stopped" (by SIGTERM or SIGINT at a safe point: the next run resumes it), then where
+/// and when, then details. It tells a merge, and `latentbench status`, why a unit has no
+/// outputs; the outputs' keys alone say whether it completed.
+std::string status_path(const std::string& run_dir, const std::string& id) { return unit_status_path(run_dir, id); }
 
 /// A status that could not be written (a full disk): the status file is renamed to
 /// `<id>.status.unwritten-<status>`, which needs no free space, so that a merge can say
@@ -99,7 +102,7 @@ std::string unwritten_path(const std::string& run_dir, const std::string& id, co
     return status_path(run_dir, id) + ".unwritten-" + status;
 }
 
-constexpr const char* kStatuses[] = {"running", "done", "failed"};
+constexpr const char* kStatuses[] = {"running", "done", "failed", "stopped"};
 
 /// Write the status atomically (io/atomic_file.hpp): the file holds the old status or the
 /// new one, whole. If it cannot be written, mark that (unwritten_path) and rethrow.
@@ -156,6 +159,14 @@ public:
             case UnitKind::Fit: run_fit(u); break;
             case UnitKind::Eval: run_eval(u); break;
             }
+        } catch (const Stopped& e) {
+            // Not a failure: the checkpoint is written and the next run resumes from it.
+            try {
+                write_status(m_plan.run_dir, u.id, "stopped", e.what());
+            } catch (const Error&) {
+                // The stop is what the caller must see; the merge reads the mark.
+            }
+            throw;
         } catch (const std::exception& e) {
             try {
                 write_status(m_plan.run_dir, u.id, "failed", e.what());
@@ -310,7 +321,7 @@ private:
         ls.model = std::make_unique<PhysicsModel>(ls.data.physics);
         AutoencoderOptions ao = resolved_autoencoder(spec, ls.scene, u.seed);
         ao.progress = log_level() >= LogLevel::Info;
-        ao.checkpoint_path = u.scene_dir + "/ae.checkpoint.h5";
+        ao.checkpoint_path = unit_checkpoint_path(u);
         ao.resume = !m_cache.forced("autoencoder");
         ls.ae_options = ao;
         const std::string& file = u.outputs[1].file;
@@ -369,7 +380,7 @@ private:
         in.data = &ls.data;
         in.model = ls.model.get();
         if (method.needs_autoencoder()) in.autoencoder = ls.ae;
-        in.checkpoint_path = u.scene_dir + "/integrators/" + u.stem + ".checkpoint.h5";
+        in.checkpoint_path = unit_checkpoint_path(u);
         in.resume = !m_cache.forced("integrators");
         in.progress = log_level() >= LogLevel::Info;
         in.newton = ls.scene.newton;
@@ -518,6 +529,7 @@ std::string unit_problem(const ExperimentPlan& plan, const Unit& u)
     std::getline(in, where);
     while (std::getline(in, line)) detail += (detail.empty() ? "" : " ") + line;
     if (status == "failed") return "failed on " + where + ": " + detail + log;
+    if (status == "stopped") return "stopped on " + where + " at a safe point (" + detail + "); run the suite again to resume it" + log;
     if (status == "running")
         return "started on " + where + " and did not finish (killed, pre-empted or still running)" + log;
     return "ran (" + where + "), but its outputs are missing or were made with another configuration" + log;
@@ -656,6 +668,8 @@ RunResult run_experiment(const ExperimentConfig& ex, const RunOptions& options)
             }
             try {
                 runner.run(u);
+            } catch (const Stopped&) {
+                throw;  // a signal stops the whole run, whoever's code was running
             } catch (const Error& e) {
                 if (!runner.contained(u)) throw;
                 log_warn("unit '%s' failed (the suite's other methods go on): %s", u.id.c_str(), e.what());
