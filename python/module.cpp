@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "baselines/builtin_methods.hpp"
 #include "cli/app.hpp"
 #include "core/build_info.hpp"
 #include "core/error.hpp"
@@ -23,6 +24,9 @@
 #include "latent/autoencoder.hpp"
 #include "latent/latent_potential.hpp"
 #include "methods/artefact.hpp"
+#include "pipeline/experiment.hpp"
+#include "pipeline/plan.hpp"
+#include "pipeline/run_status.hpp"
 #include "scene/scene.hpp"
 #include "sim/dataset.hpp"
 #include "sim/physics_model.hpp"
@@ -225,6 +229,29 @@ PYBIND11_MODULE(_latentbench, m)
         },
         py::arg("args"), "Run `latentbench ARGS...` in-process: (exit status, error line or '')");
     m.def("subcommand_options", &cli::subcommand_options, py::arg("subcommand"));
+    m.def(
+        "run_status",
+        [](const std::string& suite, const std::string& output) {
+            const ExperimentConfig ex = load_experiment(suite, builtin_methods());
+            const ExperimentPlan plan = plan_experiment(ex, resolve_run_dir(ex, output));
+            py::list units;
+            for (const UnitStatus& s : run_status(plan)) {
+                py::dict d;
+                d["id"] = s.unit->id;
+                d["kind"] = unit_kind_name(s.unit->kind);
+                d["state"] = unit_state_name(s.state);
+                d["where"] = s.where;
+                d["detail"] = s.detail;
+                d["trainer"] = s.progress ? py::cast(s.progress->trainer) : py::none();
+                d["epoch"] = s.progress ? py::cast(s.progress->epoch) : py::none();
+                d["epochs"] = s.progress && s.progress->epochs > 0 ? py::cast(s.progress->epochs) : py::none();
+                d["seconds"] = s.progress && s.progress->seconds >= 0 ? py::cast(s.progress->seconds) : py::none();
+                units.append(d);
+            }
+            return units;
+        },
+        py::arg("suite"), py::arg("output") = "",
+        "`latentbench status SUITE [-o OUTPUT]` as data: one dict per work unit");
 
     // ---- datasets ----
     py::class_<SequenceData>(m, "Sequence")

@@ -28,7 +28,7 @@ __all__ = [
     "Autoencoder", "Dataset", "Error", "LatentPotential", "Physics", "Rollout", "Sequence", "Table",
     "TableCell", "cli", "diagnose", "evaluate", "fit", "latent_energy", "load_artefact",
     "load_rollout_summaries", "load_rollouts", "metric_columns", "read_table", "rollout", "run",
-    "save_rollouts", "simulate", "train_autoencoder",
+    "save_rollouts", "simulate", "status", "train_autoencoder",
 ]
 
 _GLOBAL = {"threads": "--threads", "quiet": "--quiet", "verbose": "--verbose"}
@@ -132,6 +132,15 @@ def run(suite, **options):
     """``latentbench run SUITE ...``: the whole suite (cached stages), or check=True, unit=,
     merge=True as on the command line."""
     return cli(*_command("run", [suite], options))
+
+
+def status(suite, output=None):
+    """``latentbench status SUITE [-o OUTPUT]`` as data: one dict per work unit, in plan
+    order, with ``id``, ``kind`` (scene, fit, eval), ``state`` ("done", "running",
+    "running elsewhere", "interrupted", "stopped", "failed", "stale", "not started"),
+    ``where`` and ``detail`` (from its status file), and for a unit with a training
+    checkpoint ``trainer``, ``epoch``, ``epochs`` (the budget) and ``seconds`` (else None)."""
+    return _core.run_status(str(suite), "" if output is None else str(output))
 
 
 def latent_energy(physics, autoencoder, z, bc_targets, x_prev, x_prev2, penalty_weight=1e5,

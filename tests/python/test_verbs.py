@@ -97,3 +97,21 @@ def test_errors_carry_the_cli_message(cloth, tmp_path):
             call()
         assert str(e.value) == expected
         assert not out.exists()
+
+
+def test_status_lists_every_unit_with_its_state(tmp_path):
+    suite = CLOTH.parent.parent / "quickstart.toml"
+    units = lb.status(suite, output=tmp_path / "run")
+    assert units and units[0]["kind"] == "scene" and {u["kind"] for u in units} == {"scene", "fit", "eval"}
+    assert all(u["state"] == "not started" and u["epoch"] is None for u in units)
+    # A unit's status file is what status reads: a made-up stop, and a made-up failure.
+    (tmp_path / "run" / "units").mkdir(parents=True)
+    fit = next(u["id"] for u in units if u["kind"] == "fit")
+    (tmp_path / "run" / "units" / f"{fit}.status").write_text("stopped\nnode pid 7 2026-12-07 10:00:00 UTC\nby SIGTERM\n")
+    scene = units[0]["id"]
+    (tmp_path / "run" / "units" / f"{scene}.status").write_text("failed\nnode pid 7 2026-12-07 10:00:00 UTC\nbad mesh\n")
+    again = {u["id"]: u for u in lb.status(suite, output=tmp_path / "run")}
+    assert again[fit]["state"] == "stopped" and again[fit]["detail"] == "by SIGTERM"
+    assert again[scene]["state"] == "failed" and again[scene]["where"].startswith("node pid 7")
+    with pytest.raises(lb.Error):
+        lb.status(tmp_path / "missing.toml")
