@@ -54,7 +54,7 @@ void register_run(CLI::App& app)
         std::string unit;
         bool check = false, merge = false;
         std::string deviations_dir;
-        std::vector<std::string> scenes, integrators;
+        std::vector<std::string> scenes, integrators, reuse;
     };
     auto a = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("run", "Run an experiment suite: simulate, train, roll out, tables, plots (cached stages)");
@@ -71,6 +71,9 @@ void register_run(CLI::App& app)
                     "with the whole suite");
     cmd->add_option("--integrator", a->integrators,
                     "Run only the [[integrators]] entry with this name (repeatable; full_space runs as configured)");
+    cmd->add_option("--reuse", a->reuse,
+                    "Another suite's run directory (repeatable): outputs with the same cache key there (a "
+                    "scene's dataset and autoencoder, fits, rollouts) are copied instead of recomputed");
     cmd->add_option("--write-deviations", a->deviations_dir,
                     "With --check: also write each scene's deviations table (deviations_<scene>.md/.csv/.tex) into "
                     "this existing folder, e.g. a published suite's tables/")
@@ -89,6 +92,7 @@ void register_run(CLI::App& app)
         RunOptions options;
         options.output_dir = a->output;
         options.force.insert(a->force.begin(), a->force.end());
+        options.reuse = a->reuse;
         if (!a->unit.empty()) {
             const RunResult r = run_unit(ex, a->unit, options);
             std::printf("unit %s: %d stages run, %d cached, %.1f s\n", a->unit.c_str(), r.stages_run, r.stages_cached,

@@ -141,6 +141,11 @@ const std::vector<std::string>& experiment_stages();
 struct RunOptions {
     std::set<std::string> force;  ///< stage names, or "all"
     std::string output_dir;       ///< overrides the config's
+    /// Other run directories (`run --reuse DIR`): a unit output whose cache key equals that
+    /// of a file there (its `.key` sidecar) is copied instead of recomputed, e.g. the
+    /// dataset and autoencoder that several suites of one scene share. Never for a forced
+    /// stage; a copy that does not open is recomputed as any damaged cache entry is.
+    std::vector<std::string> reuse;
 };
 
 struct RunResult {

@@ -620,6 +620,67 @@ void throw_if_units_failed(const ExperimentConfig& ex, const RunResult& result)
 }
 
 /// What every entry point does first: the run directory, its log, the plan.
+/// The stage that makes output `index` of `u` (for --force): a scene unit's dataset, then
+/// its autoencoder; a fit's artefact; an eval's rollouts.
+const char* stage_of_output(const Unit& u, size_t index)
+{
+    switch (u.kind) {
+    case UnitKind::Scene: return index == 0 ? "simulate" : "autoencoder";
+    case UnitKind::Fit: return "integrators";
+    case UnitKind::Eval: return "rollouts";
+    }
+    return "";
+}
+
+/// `--reuse DIR`: copy into the plan's run directory every unit output that is not current
+/// there and whose key a file under one of `dirs` carries (its `<file>.key`). Keys hash the
+/// configuration and the inputs' keys (stage_cache.hpp), so an equal key is the same stage
+/// output, whichever suite made it.
+void reuse_outputs(const ExperimentPlan& plan, const std::vector<std::string>& dirs, const StageCache& cache)
+{
+    if (dirs.empty()) return;
+    std::map<std::string, std::pair<std::string, std::string>> by_key;  // key -> (file, its --reuse directory); first wins
+    for (const std::string& dir : dirs) {
+        std::error_code ec;
+        if (!fs::is_directory(dir, ec))
+            throw ConfigError("--reuse '" + dir + "': not a directory (give another suite's run directory)");
+        if (fs::equivalent(dir, plan.run_dir, ec)) continue;
+        for (auto it = fs::recursive_directory_iterator(dir, fs::directory_options::skip_permission_denied, ec);
+             it != fs::recursive_directory_iterator(); it.increment(ec)) {
+            if (ec) break;
+            const fs::path& p = it->path();
+            if (it->is_directory() && (p.filename() == "units" || p.filename() == "slurm" || p.filename() == ".bin")) {
+                it.disable_recursion_pending();
+                continue;
+            }
+            if (p.extension() != ".key" || !it->is_regular_file()) continue;
+            const fs::path file = p.parent_path() / p.stem();
+            if (!fs::is_regular_file(file)) continue;
+            std::ifstream in(p);
+            std::string key;
+            if (std::getline(in, key) && !key.empty()) by_key.emplace(key, std::make_pair(file.string(), dir));
+        }
+    }
+    for (const Unit& u : plan.units) {
+        int copied = 0;
+        std::string from;
+        for (size_t i = 0; i < u.outputs.size(); ++i) {
+            const UnitOutput& o = u.outputs[i];
+            if (unit_output_current(o) || cache.forced(stage_of_output(u, i))) continue;
+            const auto hit = by_key.find(o.key);
+            if (hit == by_key.end()) continue;
+            fs::create_directories(fs::path(o.file).parent_path());
+            copy_file_atomically(hit->second.first, o.file);
+            write_text_atomically(o.file + ".key", o.key + "\n");
+            ++copied;
+            from = hit->second.second;
+        }
+        if (copied > 0)
+            log_info("unit '%s': %d output%s reused from %s (same cache key)", u.id.c_str(), copied,
+                     copied == 1 ? "" : "s", from.c_str());
+    }
+}
+
 struct Session {
     Timer total;
     StageCache cache;
@@ -633,6 +694,7 @@ struct Session {
         fs::create_directories(result.run_dir + "/units");
         set_log_file(result.run_dir + "/" + log_name);
         plan = plan_experiment(ex, result.run_dir);
+        reuse_outputs(plan, options.reuse, cache);
     }
 
     RunResult finish(const ExperimentConfig& ex, const std::string& what)

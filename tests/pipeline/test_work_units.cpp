@@ -645,3 +645,88 @@ TEST(WorkUnits, FitVersionIsPartOfTheStageKey)
 
 } // namespace
 } // namespace lb
+
+namespace lb {
+namespace {
+
+/// Two suites of one scene: `b` has `a`'s autoencoder and `ours`, plus an entry of its own.
+const char* kReuseA = R"(
+name = "reuse_a"
+[autoencoder]
+hidden = [16]
+pca = 8
+epochs = 20
+batch = 16
+learning_rate = 1.0e-3
+[training]
+epochs = 5
+hidden = [16]
+learning_rate = 1.0e-3
+[[integrators]]
+name = "ours"
+[[scenes]]
+scene = "experiments/scenes/cantilever.toml"
+variant = "small"
+[evaluation]
+frames = 40
+full_space = false
+[outputs]
+plots = false
+)";
+
+bool same_bytes(const std::string& a, const std::string& b) { return read_all(a) == read_all(b) && !read_all(a).empty(); }
+
+TEST(WorkUnits, ReuseCopiesOutputsWithTheSameKeyFromAnotherRunDirectory)
+{
+    const std::string a = write_suite("reuse_a", kReuseA);
+    const std::string a_run = fresh_dir("units_reuse_a_run");
+    ASSERT_EQ(run_cli("-q run " + a + " -o " + a_run).exit_code, 0);
+
+    std::string b_text = replaced(kReuseA, "name = \"reuse_a\"", "name = \"reuse_b\"");
+    b_text = replaced(b_text, "[[scenes]]", "[[integrators]]\nname = \"wide\"\nhidden = [24]\n[[scenes]]");
+    const std::string b = write_suite("reuse_b", b_text);
+    const std::string b_run = fresh_dir("units_reuse_b_run");
+    const auto reused = run_cli("run " + b + " -o " + b_run + " --reuse " + a_run);
+    ASSERT_EQ(reused.exit_code, 0) << reused.output;
+    EXPECT_NE(reused.output.find("unit 'scene.cantilever_small': 2 outputs reused from"), std::string::npos)
+        << reused.output;
+    EXPECT_NE(reused.output.find("unit 'fit.cantilever_small.ours': 1 output reused from"), std::string::npos);
+    EXPECT_NE(reused.output.find("unit 'eval.cantilever_small.ours': 1 output reused from"), std::string::npos);
+    EXPECT_EQ(reused.output.find("'fit.cantilever_small.wide': 1 output reused"), std::string::npos);  // b's own
+    const std::string sa = a_run + "/cantilever_small/", sb = b_run + "/cantilever_small/";
+    EXPECT_TRUE(same_bytes(sa + "data.h5", sb + "data.h5"));
+    EXPECT_TRUE(same_bytes(sa + "ae.h5", sb + "ae.h5"));
+    EXPECT_TRUE(same_bytes(sa + "integrators/ours.h5", sb + "integrators/ours.h5"));
+    EXPECT_TRUE(fs::exists(sb + "integrators/wide.h5"));
+    // The reused units are complete under b's own keys: a rerun runs nothing.
+    const auto again = run_cli("-q run " + b + " -o " + b_run);
+    EXPECT_NE(again.output.find("0 stages run"), std::string::npos) << again.output;
+
+    // Another autoencoder: its dataset is the same, the autoencoder and everything after it is not.
+    const std::string c = write_suite("reuse_c", replaced(replaced(kReuseA, "name = \"reuse_a\"", "name = \"reuse_c\""),
+                                                          "epochs = 20", "epochs = 21"));
+    const std::string c_run = fresh_dir("units_reuse_c_run");
+    const auto partly = run_cli("run " + c + " -o " + c_run + " --reuse " + a_run);
+    ASSERT_EQ(partly.exit_code, 0) << partly.output;
+    EXPECT_NE(partly.output.find("unit 'scene.cantilever_small': 1 output reused from"), std::string::npos)
+        << partly.output;
+    EXPECT_EQ(partly.output.find("unit 'fit.cantilever_small.ours': 1 output reused"), std::string::npos);
+    EXPECT_FALSE(same_bytes(sa + "ae.h5", c_run + "/cantilever_small/ae.h5"));
+
+    // A forced stage is recomputed, not copied.
+    const std::string d_run = fresh_dir("units_reuse_d_run");
+    const auto forced = run_cli("run " + b + " -o " + d_run + " --reuse " + a_run + " --force integrators");
+    ASSERT_EQ(forced.exit_code, 0) << forced.output;
+    EXPECT_NE(forced.output.find("unit 'scene.cantilever_small': 2 outputs reused"), std::string::npos);
+    EXPECT_EQ(forced.output.find("unit 'fit.cantilever_small.ours': 1 output reused"), std::string::npos);
+
+    // Not a directory: exit 1 naming the option and the path, nothing run.
+    const std::string e_run = fresh_dir("units_reuse_e_run");
+    const auto bad = run_cli("-q run " + b + " -o " + e_run + " --reuse " + e_run + "/missing");
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_NE(bad.output.find("--reuse '" + e_run + "/missing': not a directory"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(e_run + "/cantilever_small/data.h5"));
+}
+
+} // namespace
+} // namespace lb
