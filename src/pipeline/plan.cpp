@@ -113,6 +113,25 @@ std::string unit_status_path(const std::string& run_dir, const std::string& id)
     return run_dir + "/units/" + id + ".status";
 }
 
+std::optional<UnitStatusRecord> read_status_file(const std::string& path)
+{
+    std::ifstream in(path);
+    UnitStatusRecord r;
+    if (!std::getline(in, r.status) || r.status.empty()) return std::nullopt;
+    std::getline(in, r.where);
+    for (std::string line; std::getline(in, line);)
+        if (!line.empty()) r.detail += (r.detail.empty() ? "" : " ") + line;
+    if (r.status == "failed" && r.detail.find(": stopped by SIG") != std::string::npos &&
+        r.detail.find("the next run resumes") != std::string::npos)
+        r.status = "stopped";
+    return r;
+}
+
+std::optional<UnitStatusRecord> read_unit_status(const std::string& run_dir, const std::string& id)
+{
+    return read_status_file(unit_status_path(run_dir, id));
+}
+
 std::string unit_checkpoint_path(const Unit& unit)
 {
     switch (unit.kind) {

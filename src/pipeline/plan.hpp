@@ -91,6 +91,17 @@ std::string manifest_jsonl(const ExperimentConfig& ex, const ExperimentPlan& pla
 /// `<run_dir>/units/<id>.status`, where a unit records how its last run went
 /// (run_experiment.cpp writes it; `latentbench status` and the merge read it).
 std::string unit_status_path(const std::string& run_dir, const std::string& id);
+/// A status file as written: its status ("running", "done", "failed" or "stopped"), where
+/// and when ("<host> pid <pid> <date>"), and its details joined on one line.
+struct UnitStatusRecord {
+    std::string status, where, detail;
+};
+/// The status file at `path`, or nullopt if it is missing or empty. A signal's stop that
+/// a run before "stopped" existed recorded as "failed" (the training loop's "... stopped
+/// by SIGTERM after epoch ...; the next run resumes from it") reads as "stopped".
+std::optional<UnitStatusRecord> read_status_file(const std::string& path);
+/// read_status_file(unit_status_path(run_dir, id)).
+std::optional<UnitStatusRecord> read_unit_status(const std::string& run_dir, const std::string& id);
 /// The training checkpoint a unit writes while it trains: a scene unit's autoencoder
 /// (`<scene_dir>/ae.checkpoint.h5`), a fit unit's method
 /// (`<scene_dir>/integrators/<stem>.checkpoint.h5`); "" for an eval unit.

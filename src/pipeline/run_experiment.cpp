@@ -183,13 +183,11 @@ public:
         }
     }
 
-    /// The first line of a unit's status file ("" if none).
+    /// A unit's recorded status ("" if none).
     std::string status_of(const Unit& u) const
     {
-        std::ifstream in(status_path(m_plan.run_dir, u.id));
-        std::string status;
-        std::getline(in, status);
-        return status;
+        const std::optional<UnitStatusRecord> r = read_unit_status(m_plan.run_dir, u.id);
+        return r ? r->status : "";
     }
 
     /// True for a fit or eval unit of a method whose failures are contained (user code).
@@ -514,20 +512,18 @@ std::string unit_problem(const ExperimentPlan& plan, const Unit& u)
     const std::string log = " (log: " + plan.run_dir + "/units/" + u.id + ".log)";
     for (const char* attempted : kStatuses) {
         const std::string marked = unwritten_path(plan.run_dir, u.id, attempted);
-        std::ifstream in(marked);
-        std::string status, where;
-        if (!std::getline(in, status)) continue;
-        std::getline(in, where);
-        return "its last status write failed (a full disk?): the unit, started on " + where +
+        const std::optional<UnitStatusRecord> kept = read_status_file(marked);
+        if (!kept) continue;
+        return "its last status write failed (a full disk?): the unit, started on " + kept->where +
                ", could not record '" + attempted + "'" +
-               (std::string(attempted) == "failed" ? " and why" : "") + " (status '" + status + "' kept as " + marked +
-               "); its outputs are incomplete" + log;
+               (std::string(attempted) == "failed" ? " and why" : "") + " (status '" + kept->status + "' kept as " +
+               marked + "); its outputs are incomplete" + log;
     }
-    std::ifstream in(status_path(plan.run_dir, u.id));
-    std::string status, where, detail, line;
-    if (!std::getline(in, status)) return "not run";
-    std::getline(in, where);
-    while (std::getline(in, line)) detail += (detail.empty() ? "" : " ") + line;
+    const std::optional<UnitStatusRecord> record = read_unit_status(plan.run_dir, u.id);
+    if (!record) return "not run";
+    const std::string& status = record->status;
+    const std::string& where = record->where;
+    const std::string& detail = record->detail;
     if (status == "failed") return "failed on " + where + ": " + detail + log;
     if (status == "stopped") return "stopped on " + where + " at a safe point (" + detail + "); run the suite again to resume it" + log;
     if (status == "running")

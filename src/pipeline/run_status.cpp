@@ -47,14 +47,6 @@ std::optional<bool> process_alive(const std::string& line)
     return ::kill(pid_t(w->pid), 0) == 0 || errno == EPERM;
 }
 
-/// Runs before "stopped" was a status of its own recorded a signal's stop as "failed"
-/// with the training loop's message ("... stopped by SIGTERM after epoch ...; checkpoint
-/// '...' written: the next run resumes from it").
-bool is_recorded_stop(const std::string& detail)
-{
-    return detail.find(": stopped by SIG") != std::string::npos && detail.find("the next run resumes") != std::string::npos;
-}
-
 /// "12,345" for 12345.
 std::string grouped(long long n)
 {
@@ -122,15 +114,14 @@ std::vector<UnitStatus> run_status(const ExperimentPlan& plan)
             out.push_back(s);
             continue;
         }
-        std::ifstream in(unit_status_path(plan.run_dir, u.id));
-        std::string status;
-        if (std::getline(in, status)) {
-            std::getline(in, s.where);
-            for (std::string line; std::getline(in, line);)
-                if (!line.empty()) s.detail += (s.detail.empty() ? "" : " ") + line;
+        const std::optional<UnitStatusRecord> record = read_unit_status(plan.run_dir, u.id);
+        const std::string status = record ? record->status : "";
+        if (record) {
+            s.where = record->where;
+            s.detail = record->detail;
         }
         if (status.empty()) s.state = UnitState::NotStarted;
-        else if (status == "failed") s.state = is_recorded_stop(s.detail) ? UnitState::Stopped : UnitState::Failed;
+        else if (status == "failed") s.state = UnitState::Failed;
         else if (status == "stopped") s.state = UnitState::Stopped;
         else if (status == "done") s.state = UnitState::Stale;
         else if (status == "running") {
