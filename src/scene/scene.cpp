@@ -324,6 +324,7 @@ Scene load_scene_from_string(const std::string& text, const std::string& source,
         scene.newton.gradient_tolerance = solver->get_double("gradient_tolerance", scene.newton.gradient_tolerance);
         scene.newton.step_tolerance = solver->get_double("step_tolerance", scene.newton.step_tolerance);
         scene.newton.max_iterations = solver->get_count("max_iterations", scene.newton.max_iterations, 1, 1'000'000);
+        scene.newton.lagged_factor_cg = solver->get_count("lagged_factor_cg", scene.newton.lagged_factor_cg, 0, 10'000);
         if (scene.newton.gradient_tolerance <= 0.0) solver->fail("gradient_tolerance", "must be positive");
         solver->finish();
     }

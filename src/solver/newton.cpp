@@ -72,6 +72,7 @@ void NewtonWorkspace::analyze(const SparseMatrixd& lower)
         m_diagonal[size_t(j)] = outer[j];
     }
     if (!m_cholesky) m_cholesky = std::make_unique<SparseCholesky>();
+    m_factor_current = false;
     m_cholesky->analyze(lower);
     m_outer.assign(outer, outer + lower.cols() + 1);
     m_inner.assign(inner, inner + lower.nonZeros());
@@ -96,9 +97,18 @@ bool NewtonWorkspace::newton_direction(Objective& f, const VectorXd& x, bool pro
     if (f.hessian_kind() == HessianKind::Sparse) {
         SparseMatrixd& A = f.sparse_hessian(x, project_psd);
         ws.ensure_analyzed(A);
+        if (!project_psd && opt.lagged_factor_cg > 0 && ws.m_factor_current && ws.m_factor_exact) {
+            const double gnorm = ws.m_g.norm();
+            const double eta = std::min(opt.cg_forcing_max, ws.m_g0_norm > 0.0 ? gnorm / ws.m_g0_norm : 1.0);
+            if (ws.lagged_factor_cg(A, ws.m_g, eta, opt.lagged_factor_cg, dx, summary)) {
+                dx = -dx;
+                if (dx.allFinite() && ws.m_g.dot(dx) < 0.0) return true;
+            }
+        }
         double mean_diag = 0.0;
         for (Index i : ws.m_diagonal) mean_diag += std::abs(A.valuePtr()[i]);
         mean_diag /= double(std::max<size_t>(ws.m_diagonal.size(), 1));
+        const int regularizations_before = summary.regularizations;
         return regularized_direction(
             mean_diag, regularize, opt, ws.m_g, dx, summary,
             [&](double d) {
@@ -106,6 +116,9 @@ bool NewtonWorkspace::newton_direction(Objective& f, const VectorXd& x, bool pro
             },
             [&](std::string& message) {
                 const FactorStatus status = ws.m_cholesky->factorize(A);
+                ++summary.factorizations;
+                ws.m_factor_current = status == FactorStatus::Success;
+                ws.m_factor_exact = !project_psd && summary.regularizations == regularizations_before;
                 message = ws.m_cholesky->message();
                 return status;
             },
@@ -126,6 +139,33 @@ bool NewtonWorkspace::newton_direction(Objective& f, const VectorXd& x, bool pro
             return ok ? FactorStatus::Success : FactorStatus::NotPositiveDefinite;
         },
         [&](const VectorXd& b, VectorXd& out) { out = ws.m_ldlt.solve(b); });
+}
+
+bool NewtonWorkspace::lagged_factor_cg(const SparseMatrixd& A, const VectorXd& g, double eta, int max_iterations,
+                                       VectorXd& d, SolveSummary& summary)
+{
+    const double target = eta * g.norm();
+    VectorXd &r = m_cg_r, &z = m_cg_z, &p = m_cg_p, &q = m_cg_q;
+    d.setZero(g.size());
+    r = g;
+    m_cholesky->solve(r, z);
+    p = z;
+    double rz = r.dot(z);
+    for (int k = 0; k < max_iterations; ++k) {
+        q.noalias() = A.selfadjointView<Eigen::Lower>() * p;
+        const double curvature = p.dot(q);
+        ++summary.cg_iterations;
+        if (!(curvature > 0.0) || !(rz > 0.0)) return false;  // indefinite, or a breakdown
+        const double a = rz / curvature;
+        d.noalias() += a * p;
+        r.noalias() -= a * q;
+        if (r.norm() <= target) return true;
+        m_cholesky->solve(r, z);
+        const double rz_next = r.dot(z);
+        p = z + (rz_next / rz) * p;
+        rz = rz_next;
+    }
+    return false;
 }
 
 /// Newton direction: exact Hessian first (Adaptive), then projected, then regularised
@@ -201,6 +241,7 @@ SolveSummary minimize_newton(Objective& f, VectorXd& x, const NewtonOptions& opt
     double energy = f.value(x);
     ++summary.evaluations;
     f.gradient(x, g);
+    ws.m_g0_norm = g.norm();
     bool stopped = true;
     auto stop = [&](SolveTermination t) { summary.termination = t; };
     for (summary.iterations = 0;; ++summary.iterations) {

@@ -57,6 +57,20 @@ struct NewtonOptions {
     int max_regularizations = 12;
     enum class Projection { Adaptive, Always, Never };
     Projection projection = Projection::Adaptive;
+    /// Sparse Hessians: before factorising the exact Hessian, try at most this many
+    /// conjugate-gradient iterations on it, preconditioned by the last Cholesky factor that
+    /// succeeded (of an earlier iteration, or of an earlier call with the same workspace).
+    /// The direction is accepted when ||H d + ∇f|| ≤ η ||∇f||, η = min(cg_forcing_max,
+    /// ||∇f|| / ||∇f₀||) (∇f₀: the call's first gradient), so that the convergence stays
+    /// superlinear; a stale factor, negative curvature or no convergence falls back to a
+    /// new factorisation. Only a factor of the exact, unshifted Hessian is used (after a
+    /// projected or shifted one, the next direction is factorised): CG does not see that
+    /// an exact Hessian is indefinite as a factorisation does. For the solids and rods
+    /// (tests/sim/test_small_scenes.cpp); the small cloth amplifies any tolerance-sized
+    /// difference about 2.7-fold per frame. Scene key [solver] lagged_factor_cg.
+    /// 0 (default): every direction is a direct solve.
+    int lagged_factor_cg = 0;
+    double cg_forcing_max = 0.1;
 };
 
 /// Storage minimize_newton reuses between calls: the CHOLMOD symbolic analysis of
@@ -86,7 +100,16 @@ private:
     bool armijo_search(Objective& f, const VectorXd& x, double energy, double slope, const NewtonOptions& opt,
                        SolveSummary& summary, double& alpha, double& trial_energy);
 
+    /// d ≈ A⁻¹g by CG preconditioned by m_cholesky's factor (NewtonOptions::lagged_factor_cg);
+    /// false on negative curvature or without convergence in `max_iterations`.
+    bool lagged_factor_cg(const SparseMatrixd& A, const VectorXd& g, double eta, int max_iterations, VectorXd& d,
+                          SolveSummary& summary);
+
     std::unique_ptr<SparseCholesky> m_cholesky;  // created on first sparse use
+    bool m_factor_current = false;  // m_cholesky holds a successful factor of the analysed pattern
+    bool m_factor_exact = false;    // ... of an exact Hessian, unshifted (it was positive definite)
+    double m_g0_norm = 0.0;         // ||∇f|| at the start of the current minimize_newton call
+    VectorXd m_cg_r, m_cg_z, m_cg_p, m_cg_q;
     std::vector<Index> m_outer, m_inner;         // the analysed pattern
     std::vector<Index> m_diagonal;               // value index of each diagonal entry
     MatrixXd m_dense;

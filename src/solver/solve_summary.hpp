@@ -48,6 +48,10 @@ struct SolveSummary {
     int regularizations = 0;
     /// Newton: iterations that needed the PSD-projected Hessian.
     int projected_iterations = 0;
+    /// Newton, sparse: numeric Cholesky factorisations, and conjugate-gradient iterations
+    /// on a lagged factor (NewtonOptions::lagged_factor_cg).
+    int factorizations = 0;
+    int cg_iterations = 0;
     double seconds = 0.0;
     std::string message;
 

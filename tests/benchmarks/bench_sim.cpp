@@ -71,7 +71,7 @@ struct Stepper {
 
     /// After kWarmup steps; nullptr (with the state's error set) when the scene does not load.
     static std::unique_ptr<Stepper> make(benchmark::State& state, const std::string& scene_name,
-                                         const std::string& variant)
+                                         const std::string& variant, int lagged_factor_cg = -1)
     {
         set_log_level(LogLevel::Quiet);
         auto s = std::make_unique<Stepper>();
@@ -83,6 +83,7 @@ struct Stepper {
             return nullptr;
         }
         s->model = std::make_unique<PhysicsModel>(physics_spec(*s->scene));
+        if (lagged_factor_cg >= 0) s->scene->newton.lagged_factor_cg = lagged_factor_cg;
         s->sim = std::make_unique<FullSpaceSimulator>(*s->model, s->scene->newton);
         const SequenceSpec& seq = s->scene->sequences.front();
         s->traj = s->scene->trajectory(seq);
@@ -102,11 +103,12 @@ struct Stepper {
     }
 };
 
-void sim_step(benchmark::State& state, const std::string& scene_name, const std::string& variant)
+void sim_step(benchmark::State& state, const std::string& scene_name, const std::string& variant,
+              int lagged_factor_cg = -1)
 {
-    const std::unique_ptr<Stepper> s = Stepper::make(state, scene_name, variant);
+    const std::unique_ptr<Stepper> s = Stepper::make(state, scene_name, variant, lagged_factor_cg);
     if (!s) return;
-    long iterations = 0, steps = 0;
+    long iterations = 0, steps = 0, factorizations = 0, cg_iterations = 0;
     const LoopClock clock;
     for (auto _ : state) {
         const SolveSummary r = s->advance();
@@ -115,10 +117,14 @@ void sim_step(benchmark::State& state, const std::string& scene_name, const std:
             break;
         }
         iterations += r.iterations;
+        factorizations += r.factorizations;
+        cg_iterations += r.cg_iterations;
         ++steps;
         benchmark::DoNotOptimize(s->x.data());
     }
     state.counters["newton_it"] = steps ? double(iterations) / double(steps) : 0.0;
+    state.counters["factorizations"] = steps ? double(factorizations) / double(steps) : 0.0;
+    state.counters["cg_it"] = steps ? double(cg_iterations) / double(steps) : 0.0;
     state.counters["dofs"] = double(s->model->num_dofs());
     state.counters["nnz"] = double(s->sim->newton().assembler().matrix().nonZeros());
     state.counters["sys_share"] = clock.sys_share();
@@ -165,6 +171,13 @@ void sim_phase(benchmark::State& state, const std::string& scene_name, Phase pha
 #define LB_SCENE_BENCH(name)                                                                            \
     BENCHMARK_CAPTURE(sim_step, name, #name, "")->Unit(benchmark::kMillisecond)->MinTime(3.0);          \
     BENCHMARK_CAPTURE(sim_step, name##_small, #name, "small")->Unit(benchmark::kMillisecond)->MinTime(1.0)
+
+// The full-size solids with NewtonOptions::lagged_factor_cg (scene key [solver]
+// lagged_factor_cg): CG on the last factor before each new factorisation.
+BENCHMARK_CAPTURE(sim_step, armadillo_lagged_cg4, "armadillo", "", 4)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK_CAPTURE(sim_step, armadillo_lagged_cg8, "armadillo", "", 8)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK_CAPTURE(sim_step, bunny_ears_lagged_cg4, "bunny_ears", "", 4)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK_CAPTURE(sim_step, bunny_ears_lagged_cg8, "bunny_ears", "", 8)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 LB_SCENE_BENCH(cloth);
 LB_SCENE_BENCH(cantilever);

@@ -23,22 +23,24 @@ namespace {
 
 class StepAllocations : public ::testing::TestWithParam<const char*> { };
 
-TEST_P(StepAllocations, NothingAllocatedAfterTheFirstFrames)
+/// Heap allocations in frames 4-11 of the scene's small variant (after frames 1-3 warm up).
+void expect_no_steady_allocations(const char* scene_name, int lagged_factor_cg)
 {
-    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
     keep_freed_memory();
     const Scene scene =
-        load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + GetParam() + ".toml", {"small"});
+        load_scene(std::string(LB_SOURCE_DIR) + "/experiments/scenes/" + scene_name + ".toml", {"small"});
     const PhysicsModel model(physics_spec(scene));
-    FullSpaceSimulator sim(model, scene.newton);
+    NewtonOptions newton = scene.newton;
+    newton.lagged_factor_cg = lagged_factor_cg;
+    FullSpaceSimulator sim(model, newton);
     const SequenceSpec& seq = scene.sequences.front();
     const BoundaryTrajectory traj = scene.trajectory(seq);
-    ASSERT_GE(seq.frames, 12) << GetParam();
+    ASSERT_GE(seq.frames, 12) << scene_name;
     VectorXd x_prev2 = model.rest_state(), x_prev = x_prev2, x;
     int iterations = 0;
     auto advance = [&](int t) {
         const SolveSummary s = sim.step(x_prev, x_prev2, traj.targets[size_t(t)], x);
-        EXPECT_TRUE(s.converged()) << GetParam() << " frame " << t << ": " << s.brief();
+        EXPECT_TRUE(s.converged()) << scene_name << " frame " << t << ": " << s.brief();
         iterations += s.iterations;
         x_prev2.swap(x_prev);
         x_prev = x;
@@ -53,11 +55,23 @@ TEST_P(StepAllocations, NothingAllocatedAfterTheFirstFrames)
     testing::HeapCounter counter;
     for (int t = 4; t <= 11; ++t) advance(t);
     const long steady = counter.count();
-    std::printf("[ %s: %ld allocations in frames 1-3, %ld in frames 4-11 (%d Newton iterations) ]\n", GetParam(),
-                warm_up, steady, iterations);
+    std::printf("[ %s%s: %ld allocations in frames 1-3, %ld in frames 4-11 (%d Newton iterations) ]\n", scene_name,
+                lagged_factor_cg > 0 ? " (lagged factor CG)" : "", warm_up, steady, iterations);
     EXPECT_GT(warm_up, 0) << "the counter sees the solver's allocations";
     EXPECT_GT(iterations, 8) << "the frames are real dynamic steps";
-    EXPECT_EQ(steady, 0) << GetParam();
+    EXPECT_EQ(steady, 0) << scene_name;
+}
+
+TEST_P(StepAllocations, NothingAllocatedAfterTheFirstFrames)
+{
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
+    expect_no_steady_allocations(GetParam(), 0);
+}
+
+TEST_P(StepAllocations, NothingAllocatedAfterTheFirstFramesWithLaggedFactorCg)
+{
+    if (!testing::heap_counting_available()) GTEST_SKIP() << "heap counting needs glibc without AddressSanitizer";
+    expect_no_steady_allocations(GetParam(), 8);
 }
 
 INSTANTIATE_TEST_SUITE_P(SmallScenes, StepAllocations,
